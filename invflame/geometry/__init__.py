@@ -1,0 +1,17 @@
+"""Geometry: the voxel grid, pinhole cameras, camera rigs and ray–voxel traversal."""
+
+from invflame.geometry.camera import PinholeCamera, framing_sensor_size
+from invflame.geometry.grid import VoxelGrid
+from invflame.geometry.rig import CameraRig, paper_rig
+from invflame.geometry.traversal import RaySegments, ray_box_intersection, traverse
+
+__all__ = [
+    "CameraRig",
+    "PinholeCamera",
+    "RaySegments",
+    "VoxelGrid",
+    "framing_sensor_size",
+    "paper_rig",
+    "ray_box_intersection",
+    "traverse",
+]

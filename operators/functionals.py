@@ -1,0 +1,149 @@
+r"""Scalar functionals with gradients and proximal maps, and their composition with operators.
+
+A :class:`Functional` :math:`f` offers ``f(x)``, ``f.grad(x)`` (where differentiable) and
+``f.prox(x, tau)`` :math:`= \arg\min_z f(z) + \|z - x\|^2 / (2\tau)`; ``f.prox_dual(y, sigma)``
+is the proximal map of :math:`\sigma f^*` by Moreau's identity, which primal–dual solvers use.
+:class:`Composite` is :math:`f(Ax)` for a linear operator :math:`A`.
+
+The regularizers of the flame problem are composites of the gradient operator:
+``tikhonov(dims, spacing)`` is :math:`\Phi(f) = \sum_{d\in\{x,y,z\}} \mathrm{mean}((D_d f)^2)`
+and ``total_variation(dims, spacing)`` is :math:`\Phi(f) = \sum_d \mathrm{mean}(|D_d f|)`
+(anisotropic TV), the means taken over all fields and grid points.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from operators.base import LinearOperator
+from operators.derivatives import Gradient
+
+
+class Functional:
+    """A scalar function of an array, with gradient and proximal map.
+
+    Parameters
+    ----------
+    scale : float, optional
+        Positive weight :math:`c` multiplying the functional (default 1).
+    """
+
+    def __init__(self, scale: float = 1.0):
+        if not scale > 0:
+            raise ValueError(f"scale must be positive, got {scale}")
+        self.scale = float(scale)
+
+    def __call__(self, x) -> float:
+        raise NotImplementedError
+
+    def grad(self, x) -> np.ndarray:
+        raise NotImplementedError
+
+    def prox(self, x, tau: float) -> np.ndarray:
+        raise NotImplementedError
+
+    def prox_dual(self, y, sigma: float) -> np.ndarray:
+        r"""Proximal map of :math:`\sigma f^*` (Moreau: :math:`y - \sigma\,
+        \mathrm{prox}_{f/\sigma}(y/\sigma)`)."""
+        return y - sigma * self.prox(y / sigma, 1.0 / sigma)
+
+
+class SquaredL2(Functional):
+    r""":math:`f(x) = c\,\|x - b\|_2^2` with optional offset :math:`b`."""
+
+    def __init__(self, scale: float = 1.0, offset=None):
+        super().__init__(scale)
+        self.offset = None if offset is None else np.asarray(offset)
+
+    def _residual(self, x):
+        return x if self.offset is None else x - self.offset
+
+    def __call__(self, x) -> float:
+        r = self._residual(np.asarray(x))
+        return self.scale * float(np.vdot(r, r).real)
+
+    def grad(self, x) -> np.ndarray:
+        return 2.0 * self.scale * self._residual(np.asarray(x))
+
+    def prox(self, x, tau: float) -> np.ndarray:
+        b = 0.0 if self.offset is None else self.offset
+        return (np.asarray(x) + 2.0 * tau * self.scale * b) / (1.0 + 2.0 * tau * self.scale)
+
+
+class L1(Functional):
+    r""":math:`f(x) = c\,\|x\|_1`; its gradient is :math:`c\,\mathrm{sign}(x)` (0 at 0)."""
+
+    def __call__(self, x) -> float:
+        return self.scale * float(np.abs(x).sum())
+
+    def grad(self, x) -> np.ndarray:
+        return self.scale * np.sign(x)
+
+    def prox(self, x, tau: float) -> np.ndarray:
+        x = np.asarray(x)
+        return np.sign(x) * np.maximum(np.abs(x) - tau * self.scale, 0.0)
+
+    def prox_dual(self, y, sigma: float) -> np.ndarray:
+        """Projection onto the box :math:`|y_i| \\le c` (independent of ``sigma``)."""
+        return np.clip(y, -self.scale, self.scale)
+
+
+class Composite(Functional):
+    """:math:`x \\mapsto f(A x)` for a functional :math:`f` and a linear operator :math:`A`.
+
+    Parameters
+    ----------
+    functional : Functional
+        Outer functional :math:`f`.
+    op : LinearOperator
+        Inner linear operator :math:`A`.
+    """
+
+    def __init__(self, functional: Functional, op: LinearOperator):
+        super().__init__(1.0)
+        self.functional = functional
+        self.op = op
+
+    def __call__(self, x) -> float:
+        return self.functional(self.op(x))
+
+    def grad(self, x) -> np.ndarray:
+        return self.op.vjp(None, self.functional.grad(self.op(x)))
+
+    def prox(self, x, tau: float) -> np.ndarray:
+        raise NotImplementedError(
+            "the proximal map of f(Ax) has no closed form: split it in a primal-dual solver "
+            "with prox_dual of the outer functional and the operator"
+        )
+
+
+def tikhonov(dims, spacing=1.0, dtype=np.float64) -> Composite:
+    r"""Tikhonov regularizer :math:`\sum_d \mathrm{mean}((D_d f)^2)` on ``(n_fields, nx, ny, nz)``.
+
+    Parameters
+    ----------
+    dims : tuple of 4 int
+        ``(n_fields, nx, ny, nz)``.
+    spacing : float or tuple of 3 float
+        Grid spacing in m (the differences are per metre).
+    dtype : numpy dtype, optional
+        Operator dtype.
+    """
+    grad = Gradient(dims, spacing, dtype)
+    return Composite(SquaredL2(scale=1.0 / np.prod(dims)), grad)
+
+
+def total_variation(dims, spacing=1.0, dtype=np.float64) -> Composite:
+    r"""Anisotropic total variation :math:`\sum_d \mathrm{mean}(|D_d f|)`.
+
+    Parameters
+    ----------
+    dims : tuple of 4 int
+        ``(n_fields, nx, ny, nz)``.
+    spacing : float or tuple of 3 float
+        Grid spacing in m.
+    dtype : numpy dtype, optional
+        Operator dtype.
+    """
+    grad = Gradient(dims, spacing, dtype)
+    return Composite(L1(scale=1.0 / np.prod(dims)), grad)

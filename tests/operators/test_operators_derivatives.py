@@ -1,0 +1,65 @@
+"""D_x, D_y, D_z, Gradient and the regularizers built on them."""
+
+import numpy as np
+import pytest
+
+import operators as op
+
+DIMS = (2, 5, 4, 3)  # non-cubic on purpose
+SPACING = (0.1, 0.25, 0.5)
+
+
+@pytest.mark.parametrize("name", ["D_x", "D_y", "D_z", "Gradient"])
+def test_dot_tests_in_float64(name):
+    result = op.dottest(getattr(op, name)(DIMS, SPACING), rtol=1e-10)
+    assert result.passed, str(result)
+
+
+def test_forward_differences_with_zero_last_difference():
+    f = np.random.default_rng(0).standard_normal(DIMS)
+    G = op.Gradient(DIMS, SPACING)
+    g = G(f)
+    assert g.shape == (3, *DIMS)
+    np.testing.assert_allclose(g[0, :, :-1], np.diff(f, axis=1) / 0.1, rtol=1e-12)
+    np.testing.assert_allclose(g[1, :, :, :-1], np.diff(f, axis=2) / 0.25, rtol=1e-12)
+    np.testing.assert_allclose(g[2, :, :, :, :-1], np.diff(f, axis=3) / 0.5, rtol=1e-12)
+    assert not g[0, :, -1].any() and not g[1, :, :, -1].any() and not g[2, ..., -1].any()
+
+
+def test_linear_ramp_has_constant_gradient():
+    x = np.arange(DIMS[1]) * SPACING[0]
+    f = np.broadcast_to(3.0 * x[None, :, None, None], DIMS).copy()
+    g = op.D_x(DIMS, SPACING)(f)
+    np.testing.assert_allclose(g[:, :-1], 3.0, rtol=1e-12)
+
+
+def test_regularizer_values_and_gradients():
+    rng = np.random.default_rng(3)
+    f = rng.standard_normal(DIMS)
+    G = op.Gradient(DIMS, SPACING)
+    tik = op.tikhonov(DIMS, SPACING)
+    tv = op.total_variation(DIMS, SPACING)
+    assert tik(f) == pytest.approx(sum(np.mean(d**2) for d in G(f)), rel=1e-12)
+    assert tv(f) == pytest.approx(sum(np.mean(np.abs(d)) for d in G(f)), rel=1e-12)
+    assert op.gradient_taylor_test(tik, tik.grad, f).passed
+    # TV is differentiable away from zero differences, which random fields avoid
+    result = op.gradient_taylor_test(tv, tv.grad, f, h0=1e-4)
+    assert abs(result.rate0 - 1) < 0.1
+
+
+def test_l1_prox_and_dual_prox_satisfy_moreau():
+    l1 = op.L1(scale=0.3)
+    y = np.linspace(-2, 2, 11)
+    sigma = 0.7
+    np.testing.assert_allclose(l1.prox_dual(y, sigma),
+                               y - sigma * l1.prox(y / sigma, 1 / sigma), atol=1e-14)
+    assert np.abs(l1.prox_dual(y, sigma)).max() <= 0.3
+
+
+def test_bad_dims_and_spacing():
+    with pytest.raises(ValueError, match="n_fields, nx, ny, nz"):
+        op.D_x((5, 4, 3))
+    with pytest.raises(ValueError, match="spacing"):
+        op.Gradient(DIMS, (0.1, -1, 1))
+    with pytest.raises(ValueError, match="axis"):
+        op.derivative(DIMS, "w")
