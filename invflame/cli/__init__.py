@@ -10,9 +10,9 @@ import argparse
 import sys
 
 from invflame import __version__
-from invflame.cli import demo
+from invflame.cli import co2, demo, lines
 
-COMMANDS = [demo]
+COMMANDS = [demo, lines, co2]
 
 
 def build_parser() -> argparse.ArgumentParser:
