@@ -35,6 +35,8 @@ class JaxOperator(Operator):
         self._f = jax.jit(fun)
         self._jvp_fn = jax.jit(lambda x, v: jax.jvp(fun, (x,), (v,))[1])
         self._vjp_fn = jax.jit(lambda x, w: jax.vjp(fun, x)[1](w)[0])
+        self._value_and_pullback = jax.jit(lambda x: jax.vjp(fun, x))
+        self._pull = jax.jit(lambda pullback, w: pullback(w)[0])
 
     def _in(self, x):
         return to_jax(x, dtype=self.dtype)
@@ -50,9 +52,9 @@ class JaxOperator(Operator):
 
     def linearize(self, x) -> Jacobian:
         xj = self._in(self._as_input(x))
-        value, pullback = jax.vjp(self._f, xj)
+        value, pullback = self._value_and_pullback(xj)
         return Jacobian(
             self, to_numpy(xj), to_numpy(value),
             jvp=lambda v: to_numpy(self._jvp_fn(xj, self._in(v))),
-            vjp=lambda w: to_numpy(pullback(self._in(w))[0]),
+            vjp=lambda w: to_numpy(self._pull(pullback, self._in(w))),
         )

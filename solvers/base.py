@@ -1,0 +1,343 @@
+"""The solver base class: one run loop for every solver.
+
+A solver subclasses :class:`Solver`, declares its algorithm options in ``defaults``, the problem
+kinds it ``supports``, and implements :meth:`Solver.init_state` and :meth:`Solver.step`. The
+base class checks the problem, evaluates the starting point, runs the loop with the stopping
+rules and callbacks, and saves and resumes checkpoints. A step must not change ``run.x``,
+``run.state`` or ``run.history``: it returns the new parameters, the objective there, the new
+state and diagnostics, so that an interruption at any moment leaves a consistent state behind.
+"""
+
+from __future__ import annotations
+
+import difflib
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from solvers.callbacks import as_callback
+from solvers.checkpoint import load_checkpoint, normalize, save_checkpoint
+from solvers.history import History, Result
+from solvers.problem import KINDS, Evaluation, Problem
+from solvers.stopping import StoppingRule
+
+
+class UnsupportedProblemError(ValueError):
+    """A solver asked to solve a problem it cannot handle sensibly."""
+
+
+@dataclass
+class Step:
+    """What one iteration produced.
+
+    Attributes
+    ----------
+    x : ndarray
+        New parameters.
+    evaluation : Evaluation
+        Objective at ``x``.
+    state : dict
+        New solver state (numbers and arrays only).
+    info : dict
+        Numeric diagnostics recorded in the history (e.g. ``step``, ``damping``).
+    stop : str or None
+        Reason to stop given by the solver itself (converged, line search failed...).
+    """
+
+    x: np.ndarray
+    evaluation: Evaluation
+    state: dict[str, Any]
+    info: dict[str, float] = field(default_factory=dict)
+    stop: str | None = None
+
+
+class RunState:
+    """The state of a run, as callbacks see it.
+
+    Attributes
+    ----------
+    solver : Solver
+    problem : Problem
+    x : ndarray
+        Current parameters.
+    iteration : int
+        Iterations done.
+    current : Evaluation
+        Objective at ``x``.
+    state : dict
+        Solver state (saved in checkpoints).
+    history : History
+    seed : int
+    scratch : dict
+        Per-run objects a solver may cache (never saved).
+    """
+
+    def __init__(self, solver, problem, x, current, state, history, seed, iteration=0,
+                 elapsed_before=0.0, callbacks=()):
+        self.solver = solver
+        self.problem = problem
+        self.x = x
+        self.current = current
+        self.state = state
+        self.history = history
+        self.seed = int(seed)
+        self.iteration = int(iteration)
+        self.scratch: dict[str, Any] = {}
+        self.callbacks = list(callbacks)
+        self.elapsed_before = float(elapsed_before)
+        self.started = time.perf_counter()
+
+    @property
+    def call_seconds(self) -> float:
+        """Wall seconds since this call to ``run`` began."""
+        return time.perf_counter() - self.started
+
+    @property
+    def elapsed(self) -> float:
+        """Wall seconds of the whole run, earlier segments included."""
+        return self.elapsed_before + self.call_seconds
+
+    def rng(self, stream: int = 0) -> np.random.Generator:
+        """A generator for the next iteration, a function of (seed, iteration, stream) only."""
+        return np.random.default_rng([self.seed, self.iteration + 1, 1 + stream])
+
+    def evaluate(self, x, sample: int | None = None) -> Evaluation:
+        """Objective at ``x``; ``sample`` picks the stochastic sample (default: next iteration).
+        """
+        sample = self.iteration + 1 if sample is None else sample
+        return self.problem.evaluate(x, iteration=sample, seed=self.seed)
+
+    def start_evaluation(self) -> Evaluation:
+        """The objective at ``x`` for the next iteration's sample (``current`` if it fits)."""
+        sample = self.iteration + 1
+        if self.current.sample is not None and self.current.sample != sample:
+            self.current = self.evaluate(self.x, sample)
+        return self.current
+
+    def linearized(self) -> Evaluation:
+        """``current`` with the Jacobians of the forward and regularizer operators."""
+        if self.current.forward_jacobian is None:
+            self.current = self.evaluate(self.x)
+        return self.current
+
+    def save(self, path):
+        """Write a checkpoint of this run (see :mod:`solvers.checkpoint`)."""
+        c = self.current
+        meta = {
+            "solver": self.solver.name, "options": normalize(self.solver.options),
+            "stopping": self.solver.stopping.as_dict(), "seed": self.seed,
+            "iteration": self.iteration, "problem": self.problem.name,
+            "dims": list(self.problem.dims), "dtype": str(self.problem.dtype),
+            "elapsed": self.elapsed, "history": self.history.as_dict(),
+            "current": {"loss": c.loss, "misfit": c.misfit, "regularizer": c.regularizer,
+                        "sample": c.sample},
+        }
+        grad = c.grad if c.has_grad else None
+        return save_checkpoint(path, meta, self.x, grad, self.solver.state_to_arrays(self))
+
+
+class Solver:
+    """Base class of all solvers; see the module docstring.
+
+    Parameters
+    ----------
+    max_iter, rtol_loss, rtol_x, gtol, time_budget
+        Stopping rules, see :class:`solvers.stopping.StoppingRule`.
+    **options
+        Algorithm options, listed in the solver's ``defaults``.
+    """
+
+    name = "solver"
+    defaults: dict[str, Any] = {}
+    supports = frozenset(KINDS)
+    #: Advice appended to the error for an unsupported kind, per kind.
+    kind_advice: dict[str, str] = {}
+    stochastic_ok = True
+    #: Whether resuming from a checkpoint reproduces an uninterrupted run exactly.
+    exact_resume = True
+
+    def __init__(self, *, max_iter: int = 100, rtol_loss: float | None = None,
+                 rtol_x: float | None = None, gtol: float | None = None,
+                 time_budget: float | None = None, **options):
+        unknown = [k for k in options if k not in self.defaults]
+        if unknown:
+            known = list(self.defaults)
+            close = difflib.get_close_matches(unknown[0], known + ["max_iter", "rtol_loss",
+                                                                  "rtol_x", "gtol",
+                                                                  "time_budget"], n=1)
+            hint = f" Did you mean {close[0]!r}?" if close else ""
+            raise TypeError(
+                f"solver {self.name!r} has no option {unknown[0]!r}.{hint} Its options are "
+                f"{', '.join(known) or '(none)'}, plus the stopping rules max_iter, rtol_loss, "
+                "rtol_x, gtol, time_budget"
+            )
+        self.options = {**self.defaults, **options}
+        self.stopping = StoppingRule(max_iter, rtol_loss, rtol_x, gtol, time_budget)
+        self.check_options()
+
+    def __repr__(self) -> str:
+        opts = ", ".join(f"{k}={v!r}" for k, v in self.options.items())
+        return f"<solver {self.name}: {opts}; {self.stopping}>"
+
+    # -- hooks for subclasses ------------------------------------------------------------------
+    def check_options(self) -> None:
+        """Validate ``self.options``; raise ValueError with a fix."""
+
+    def check_problem(self, problem: Problem) -> None:
+        """Solver-specific checks beyond kind and stochasticity; raise
+        :class:`UnsupportedProblemError`."""
+
+    def init_state(self, run: RunState) -> dict[str, Any]:
+        """Solver state at the starting point (numbers and arrays)."""
+        return {}
+
+    def step(self, run: RunState) -> Step:
+        """One iteration from ``run.x``; must not change ``run.x``, ``run.state``, ``run.history``.
+        """
+        raise NotImplementedError
+
+    def state_to_arrays(self, run: RunState) -> dict[str, np.ndarray]:
+        """Solver state as named arrays for a checkpoint."""
+        return {k: np.asarray(v) for k, v in run.state.items()}
+
+    def state_from_arrays(self, arrays: dict[str, np.ndarray], run: RunState) -> dict[str, Any]:
+        """Inverse of :meth:`state_to_arrays` (0-d arrays become Python numbers)."""
+        return {k: (v.item() if v.ndim == 0 else v) for k, v in arrays.items()}
+
+    # -- the run -------------------------------------------------------------------------------
+    def check(self, problem: Problem) -> None:
+        """Raise :class:`UnsupportedProblemError` if this solver should not solve ``problem``."""
+        if not isinstance(problem, Problem):
+            raise TypeError(f"expected a solvers.Problem, got {type(problem).__name__}")
+        if problem.kind not in self.supports:
+            advice = self.kind_advice.get(problem.kind, "")
+            raise UnsupportedProblemError(
+                f"solver {self.name!r} does not support problems of kind {problem.kind!r} "
+                f"(it supports {', '.join(sorted(self.supports))}). {advice}".strip()
+            )
+        if problem.stochastic and not self.stochastic_ok:
+            raise UnsupportedProblemError(
+                f"solver {self.name!r} needs the full deterministic objective but the problem "
+                "has a stochastic value_and_grad; use a first-order solver ('adam', 'gd') or "
+                "build the problem without value_and_grad"
+            )
+        self.check_problem(problem)
+
+    def run(self, problem: Problem, x0=None, callbacks=(), seed: int = 0,
+            resume=None) -> Result:
+        """Minimize the problem's objective.
+
+        Parameters
+        ----------
+        problem : Problem
+        x0 : array_like, optional
+            Starting point (default ``problem.x0``); ignored when resuming.
+        callbacks : sequence of Callback or callable, optional
+            Called after each iteration (see :mod:`solvers.callbacks`).
+        seed : int, optional
+            Seed of the run's randomness (stochastic samples, random start vectors); a resumed
+            run keeps the checkpoint's seed.
+        resume : str or Path, optional
+            Checkpoint to continue from; the solver and its algorithm options must match the
+            checkpoint's (stopping rules may differ, e.g. a larger ``max_iter``).
+
+        Returns
+        -------
+        Result
+        """
+        self.check(problem)
+        callbacks = [as_callback(c) for c in callbacks]
+        run = (self._resumed(problem, resume, callbacks) if resume is not None
+               else self._started(problem, x0, seed, callbacks))
+        for cb in callbacks:
+            cb.on_start(run)
+        try:
+            reason = self.loop(run)
+        finally:
+            for cb in callbacks:
+                cb.on_end(run)
+        return Result(x=run.x, history=run.history, stop_reason=reason,
+                      iterations=run.iteration, solver=self.name,
+                      options={**self.options, **self.stopping.as_dict()},
+                      problem=problem.name, seed=run.seed, elapsed=run.elapsed,
+                      metadata=dict(problem.metadata))
+
+    def loop(self, run: RunState) -> str:
+        """Iterate until a stopping rule fires; returns the stop reason."""
+        while True:
+            reason = self.stopping.budget_spent(run.iteration, run.call_seconds)
+            if reason:
+                return reason
+            step = self.step(run)
+            reason = self.record(run, step)
+            if reason:
+                return reason
+
+    def record(self, run: RunState, step: Step) -> str | None:
+        """Make ``step`` the current iterate, log it, call callbacks; return a stop reason."""
+        previous = run.current
+        dx = float(np.linalg.norm(np.asarray(step.x, np.float64) - run.x))
+        x_norm = float(np.linalg.norm(run.x))
+        step_ratio = dx / x_norm if x_norm > 0 else (np.inf if dx > 0 else 0.0)
+        run.x, run.current, run.state = step.x, step.evaluation, step.state
+        run.iteration += 1
+        grad_norm = _log_row(run, step.info)
+        for cb in run.callbacks:
+            if cb(run):
+                return "callback: a callback asked to stop"
+        if step.stop:
+            return step.stop
+        return (self.stopping.converged(run.current.loss, previous.loss, step_ratio, grad_norm)
+                or self.stopping.budget_spent(run.iteration, run.call_seconds))
+
+    def _started(self, problem, x0, seed, callbacks) -> RunState:
+        if x0 is None and problem.x0 is None:
+            raise ValueError("no starting point: pass x0 to run() or set Problem(x0=...)")
+        if int(seed) != seed or seed < 0:
+            raise ValueError(f"seed must be a non-negative integer, got {seed}")
+        x = problem.check_point(problem.x0 if x0 is None else x0, "x0")
+        run = RunState(self, problem, x, None, {}, History(), seed, callbacks=callbacks)
+        run.current = run.evaluate(x)
+        run.state = self.init_state(run)
+        _log_row(run, {})
+        return run
+
+    def _resumed(self, problem, path, callbacks) -> RunState:
+        ck = load_checkpoint(path)
+        meta = ck.meta
+        if meta["solver"] != self.name:
+            raise ValueError(f"checkpoint {path} was written by solver {meta['solver']!r}, "
+                             f"not {self.name!r}; resume with solvers.get({meta['solver']!r})")
+        options = normalize(self.options)
+        if meta["options"] != options:
+            diff = {k: (meta["options"].get(k), options.get(k))
+                    for k in set(options) | set(meta["options"])
+                    if meta["options"].get(k) != options.get(k)}
+            raise ValueError(f"checkpoint {path} used other options (checkpoint, now): {diff}; "
+                             "resume with the same algorithm options")
+        if tuple(meta["dims"]) != problem.dims:
+            raise ValueError(f"checkpoint {path} holds parameters of shape {tuple(meta['dims'])}"
+                             f", the problem's are {problem.dims}")
+        x = problem.check_point(ck.x, "checkpoint x")
+        c = meta["current"]
+        grad = None if ck.grad is None else ck.grad.astype(problem.dtype)
+        current = Evaluation(c["loss"], c["misfit"], c["regularizer"], grad=grad,
+                             sample=c["sample"])
+        run = RunState(self, problem, x, current, {}, History(meta["history"]), meta["seed"],
+                       iteration=meta["iteration"], elapsed_before=meta["elapsed"],
+                       callbacks=callbacks)
+        if grad is None:
+            run.current = run.evaluate(x, c["sample"])
+        run.state = self.state_from_arrays(ck.state, run)
+        return run
+
+
+def _log_row(run: RunState, info: dict[str, float]) -> float:
+    c = run.current
+    grad_norm = float(np.linalg.norm(run.problem.projected_gradient(run.x, c.grad)))
+    run.history.append(iteration=run.iteration, loss=c.loss, misfit=c.misfit,
+                       regularizer=c.regularizer, grad_norm=grad_norm, time=run.elapsed,
+                       **info)
+    return grad_norm

@@ -1,0 +1,123 @@
+r"""L-BFGS from jaxopt (``jaxopt.LBFGS``, or ``jaxopt.LBFGSB`` when the problem has bounds).
+
+The objective is whatever the problem computes (NumPy, JAX or torch operators): it reaches
+jaxopt through :func:`jax.pure_callback` returning the value and the gradient, so jaxopt runs
+its algorithm and line search (zoom, strong Wolfe) jit-compiled around a host call. The loop,
+logging, stopping rules and checkpoints are ours; the full jaxopt state (L-BFGS memory
+included) is saved, so a resumed run reproduces an uninterrupted one.
+
+The first iteration of a run compiles jaxopt's update (seconds); a solver instance keeps the
+compiled update for the last problem it solved, so a resume or a second run on that problem
+starts at once. Upstream jaxopt is no longer developed (it warns so on import); the solver uses
+only its stable L-BFGS(-B) classes.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from solvers.base import Solver, Step
+from solvers.evaluation_cache import EvaluationCache
+from solvers.registry import register
+
+_LEAF = "leaf"
+
+
+@register("jaxopt-lbfgs")
+class JaxoptLBFGS(Solver):
+    """jaxopt L-BFGS (L-BFGS-B with bounds); see the module docstring.
+
+    Options
+    -------
+    history_size : int
+        Number of correction pairs kept (default 10).
+    tol : float
+        Stop when jaxopt's error (gradient norm, projected with bounds) is at most ``tol``
+        (default 1e-8).
+    maxls : int
+        Maximum line-search steps (default 30).
+    """
+
+    defaults = {"history_size": 10, "tol": 1e-8, "maxls": 30}
+    stochastic_ok = False
+
+    def check_options(self):
+        o = self.options
+        if not (int(o["history_size"]) >= 1 and o["tol"] >= 0 and int(o["maxls"]) >= 1):
+            raise ValueError(f"jaxopt-lbfgs options out of range: need history_size >= 1, "
+                             f"tol >= 0, maxls >= 1; got {o}")
+
+    def _setup(self, run):
+        """The jaxopt solver for ``run.problem``, pointed at ``run``.
+
+        The jaxopt solver (and its compiled update) is kept on this instance for the last
+        problem it saw, so repeated runs (e.g. a resume) do not compile again; its host
+        callback evaluates through whichever run is active.
+        """
+        cached = getattr(self, "_compiled", None)
+        if cached is None or cached[0] is not run.problem:
+            cached = (run.problem, *self._build(run.problem))
+            self._compiled = cached
+        _, solver, extra, active = cached
+        active["run"] = run
+        if "cache" not in run.scratch:
+            run.scratch["cache"] = EvaluationCache()
+            run.scratch["cache"].put(run.x, run.current)
+        return solver, extra, run.scratch["cache"]
+
+    def _build(self, problem):
+        import jaxopt
+
+        active = {}
+        out_shapes = (jax.ShapeDtypeStruct((), problem.dtype),
+                      jax.ShapeDtypeStruct(problem.dims, problem.dtype))
+
+        def host(x):
+            run = active["run"]
+            x = np.asarray(x, dtype=problem.dtype)
+            cache = run.scratch["cache"]
+            ev = cache.get(x) or cache.put(x, run.evaluate(x))
+            return np.asarray(ev.loss, problem.dtype), np.asarray(ev.grad, problem.dtype)
+
+        def fun(params):
+            return jax.pure_callback(host, out_shapes, params)
+
+        o = self.options
+        kwargs = {"value_and_grad": True, "history_size": int(o["history_size"]),
+                  "tol": o["tol"], "maxls": int(o["maxls"])}
+        if not problem.bounded:
+            return jaxopt.LBFGS(fun, **kwargs), {}, active
+        lo = -np.inf if problem.lower is None else problem.lower
+        hi = np.inf if problem.upper is None else problem.upper
+        bounds = (jnp.asarray(np.broadcast_to(lo, problem.dims), problem.dtype),
+                  jnp.asarray(np.broadcast_to(hi, problem.dims), problem.dtype))
+        return jaxopt.LBFGSB(fun, **kwargs), {"bounds": bounds}, active
+
+    def init_state(self, run):
+        solver, extra, _ = self._setup(run)
+        return {"jaxopt": solver.init_state(jnp.asarray(run.x), **extra)}
+
+    def state_to_arrays(self, run):
+        leaves = jax.tree_util.tree_leaves(run.state["jaxopt"])
+        return {f"{_LEAF}{i:03d}": np.asarray(leaf) for i, leaf in enumerate(leaves)}
+
+    def state_from_arrays(self, arrays, run):
+        template = self.init_state(run)["jaxopt"]
+        treedef = jax.tree_util.tree_structure(template)
+        leaves = [jnp.asarray(arrays[f"{_LEAF}{i:03d}"]) for i in range(treedef.num_leaves)]
+        return {"jaxopt": jax.tree_util.tree_unflatten(treedef, leaves)}
+
+    def step(self, run) -> Step:
+        solver, extra, cache = self._setup(run)
+        params, state = solver.update(jnp.asarray(run.x), run.state["jaxopt"], **extra)
+        x = np.asarray(params, dtype=run.problem.dtype)
+        ev = cache.get(x) or run.evaluate(x)
+        error = float(state.error)
+        stop = None
+        if error <= self.options["tol"]:
+            stop = f"converged: jaxopt error {error:.3e} <= tol {self.options['tol']:g}"
+        elif bool(state.failed_linesearch):
+            stop = f"line search failed (jaxopt error {error:.3e})"
+        return Step(x, ev, {"jaxopt": state}, {"step": float(state.stepsize)}, stop=stop)

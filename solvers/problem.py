@@ -1,0 +1,306 @@
+r"""The inverse problem every solver works on, whatever the parameters represent.
+
+A :class:`Problem` holds a forward operator :math:`F` from parameters :math:`\theta` (voxel
+values, network weights, any array) to predicted data, the measured data :math:`d`, an optional
+regularizer :math:`\Phi(\theta) = g(K(\theta))` and its weight :math:`\lambda`, and optional box
+bounds. The objective is the paper's loss, **without** a factor one half:
+
+.. math:: L(\theta) = \|F(\theta) - d\|_2^2 + \lambda\, g(K(\theta)),
+
+with gradient :math:`\nabla L = 2 J_F(\theta)^\mathsf{T}(F(\theta) - d)
++ \lambda\, J_K(\theta)^\mathsf{T} \nabla g(K(\theta))`. The inner operator :math:`K` may be
+linear (the finite-difference gradient of a voxel grid) or nonlinear (that gradient after a
+network evaluated at voxel centres); gradient methods use ``K.vjp`` and primal–dual methods use
+``g.prox_dual`` with ``K``'s linearization.
+
+``kind`` says what :math:`\theta` is, so that a solver can refuse a pairing that makes no sense:
+
+``"generic"``
+    Any parameter vector with no further structure (default).
+``"voxel"``
+    Field values on a voxel grid.
+``"neural-centres"``
+    Network weights, with the network evaluated once at voxel centres and the renderer sampling
+    that grid (the Jacobian is a product of a small network Jacobian and the voxel one).
+``"neural-field"``
+    Network weights, with the network queried at every ray sample (huge, dense Jacobian: only
+    first-order and quasi-Newton solvers make sense).
+
+A problem may carry a stochastic ``value_and_grad(theta, iteration, rng) -> (loss, grad)``
+(e.g. a random subset of rays per iteration); first-order solvers use it instead of the full
+objective. ``rng`` is ``numpy.random.default_rng([seed, iteration])``: a function of the run's
+seed and the iteration only, so the same iteration sees the same sample after a resume.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from operators import Functional, Operator, SquaredL2
+
+KINDS = ("generic", "voxel", "neural-centres", "neural-field")
+
+
+class Regularizer:
+    r"""A regularizer :math:`\Phi(\theta) = g(K(\theta))`.
+
+    Parameters
+    ----------
+    functional : operators.Functional
+        Outer functional :math:`g` (e.g. :class:`operators.SquaredL2` for Tikhonov,
+        :class:`operators.L1` for total variation).
+    operator : operators.Operator
+        Inner operator :math:`K` from the parameters, linear or not.
+    """
+
+    def __init__(self, functional: Functional, operator: Operator):
+        if not isinstance(functional, Functional):
+            raise TypeError(f"the regularizer's outer functional must be an operators.Functional,"
+                            f" got {type(functional).__name__}")
+        if not isinstance(operator, Operator):
+            raise TypeError(f"the regularizer's inner operator must be an operators.Operator, "
+                            f"got {type(operator).__name__} (wrap pylops operators with "
+                            "operators.aslinearoperator)")
+        self.functional = functional
+        self.operator = operator
+
+    @classmethod
+    def coerce(cls, regularizer) -> Regularizer | None:
+        """``None``, a :class:`Regularizer`, an :class:`operators.Composite` ``g(A x)`` (as from
+        :func:`operators.tikhonov`) or a pair ``(g, K)``, as a :class:`Regularizer`."""
+        if regularizer is None or isinstance(regularizer, Regularizer):
+            return regularizer
+        if hasattr(regularizer, "functional") and hasattr(regularizer, "op"):
+            return cls(regularizer.functional, regularizer.op)
+        if isinstance(regularizer, tuple) and len(regularizer) == 2:
+            return cls(*regularizer)
+        raise TypeError(
+            "regularizer must be None, solvers.Regularizer(g, K), an operators.Composite such as "
+            f"operators.total_variation(...), or a pair (g, K); got {type(regularizer).__name__}"
+        )
+
+    @property
+    def quadratic(self) -> bool:
+        """Whether :math:`g` is a squared L2 norm (Tikhonov-like)."""
+        return isinstance(self.functional, SquaredL2)
+
+    def __call__(self, x) -> float:
+        return float(self.functional(self.operator(x)))
+
+    def __repr__(self) -> str:
+        return f"Regularizer({type(self.functional).__name__} o {self.operator.name})"
+
+
+def sum_of_squares(r: np.ndarray) -> float:
+    """:math:`\\|r\\|_2^2` accumulated in float64."""
+    r = np.asarray(r, dtype=np.float64).ravel()
+    return float(r @ r)
+
+
+class Evaluation:
+    """The objective at one point: total loss, its parts and a lazily computed gradient.
+
+    Attributes
+    ----------
+    loss : float
+        :math:`L(\\theta)`.
+    misfit : float
+        :math:`\\|F(\\theta) - d\\|^2` (NaN when a stochastic ``value_and_grad`` gave the loss).
+    regularizer : float
+        :math:`\\Phi(\\theta)`, unweighted (0 without a regularizer, NaN as above).
+    sample : int or None
+        Iteration whose random sample produced this evaluation; None when deterministic.
+    forward_jacobian, regularizer_jacobian : operators.Jacobian or None
+        Linearizations of :math:`F` and :math:`K` at the point (with ``.value``), when known.
+    """
+
+    def __init__(self, loss, misfit, regularizer, grad=None, grad_fn=None, sample=None,
+                 forward_jacobian=None, regularizer_jacobian=None):
+        self.loss = float(loss)
+        self.misfit = float(misfit)
+        self.regularizer = float(regularizer)
+        self.sample = sample
+        self.forward_jacobian = forward_jacobian
+        self.regularizer_jacobian = regularizer_jacobian
+        self._grad = grad
+        self._grad_fn = grad_fn
+
+    @property
+    def has_grad(self) -> bool:
+        """Whether the gradient has been computed already."""
+        return self._grad is not None
+
+    @property
+    def grad(self) -> np.ndarray:
+        """:math:`\\nabla L(\\theta)`, shape of the parameters (computed on first access)."""
+        if self._grad is None:
+            if self._grad_fn is None:
+                raise RuntimeError("this evaluation carries no gradient")
+            self._grad = self._grad_fn()
+            self._grad_fn = None
+        return self._grad
+
+
+def _bound(value, dims, dtype, what):
+    if value is None:
+        return None
+    arr = np.asarray(value, dtype=dtype)
+    try:
+        return np.broadcast_to(arr, dims)
+    except ValueError:
+        raise ValueError(f"{what} bound of shape {arr.shape} does not broadcast to the "
+                         f"parameter shape {dims}; give a scalar or an array of that shape"
+                         ) from None
+
+
+class Problem:
+    r"""Minimize :math:`\|F(\theta) - d\|_2^2 + \lambda\, g(K(\theta))` subject to bounds.
+
+    Parameters
+    ----------
+    forward : operators.Operator
+        :math:`F`, parameters (shape ``forward.dims``) to predicted data (``forward.dimsd``),
+        e.g. radiance in W/(m²·sr·cm⁻¹).
+    data : array_like
+        Measured data :math:`d`, shape ``forward.dimsd`` (or that many elements), same units.
+    regularizer : Regularizer, operators.Composite or (Functional, Operator), optional
+        :math:`\Phi = g \circ K`; None for no regularization.
+    lam : float, optional
+        Weight :math:`\lambda \ge 0` (default 1e-3, as in the paper).
+    lower, upper : float or array_like, optional
+        Box bounds on :math:`\theta` (scalars or arrays broadcastable to ``forward.dims``), in
+        the parameters' units; None for unbounded.
+    x0 : array_like, optional
+        Default starting point, shape ``forward.dims``; must satisfy the bounds.
+    kind : {"generic", "voxel", "neural-centres", "neural-field"}, optional
+        What the parameters represent (see the module docstring); solvers check it.
+    name : str, optional
+        Label for results and messages.
+    metadata : dict, optional
+        Free-form description (representation, regularizer name, units...) kept with results.
+    value_and_grad : callable, optional
+        Stochastic override ``(theta, iteration, rng) -> (loss, grad)`` used by first-order
+        solvers instead of the full objective.
+    """
+
+    def __init__(self, forward: Operator, data, regularizer=None, lam: float = 1e-3,
+                 lower=None, upper=None, x0=None, kind: str = "generic",
+                 name: str | None = None, metadata: dict[str, Any] | None = None,
+                 value_and_grad=None):
+        if not isinstance(forward, Operator):
+            raise TypeError(f"forward must be an operators.Operator, got "
+                            f"{type(forward).__name__} (wrap functions with "
+                            "Operator.from_jax / from_torch)")
+        self.forward = forward
+        self.dims = forward.dims
+        self.dtype = forward.dtype
+        data = np.asarray(data)
+        if data.size != int(np.prod(forward.dimsd)):
+            raise ValueError(f"data has shape {data.shape} but the forward operator "
+                             f"{forward.name} predicts shape {forward.dimsd}")
+        self.data = data.reshape(forward.dimsd).astype(self.dtype, copy=False)
+        self.regularizer = Regularizer.coerce(regularizer)
+        if self.regularizer is not None and self.regularizer.operator.dims != self.dims:
+            raise ValueError(f"the regularizer's operator {self.regularizer.operator.name} takes "
+                             f"shape {self.regularizer.operator.dims}, the parameters have "
+                             f"shape {self.dims}")
+        if not np.isfinite(lam) or lam < 0:
+            raise ValueError(f"lam must be a finite number >= 0, got {lam}")
+        self.lam = float(lam)
+        self.lower = _bound(lower, self.dims, self.dtype, "lower")
+        self.upper = _bound(upper, self.dims, self.dtype, "upper")
+        if self.lower is not None and self.upper is not None and np.any(self.lower > self.upper):
+            raise ValueError("lower bound exceeds upper bound somewhere; check lower <= upper")
+        if kind not in KINDS:
+            raise ValueError(f"kind must be one of {', '.join(KINDS)}; got {kind!r}")
+        self.kind = kind
+        self.name = name or f"problem({forward.name})"
+        self.metadata = dict(metadata or {})
+        if value_and_grad is not None and not callable(value_and_grad):
+            raise TypeError("value_and_grad must be a callable (theta, iteration, rng) -> "
+                            "(loss, grad)")
+        self.value_and_grad = value_and_grad
+        self.x0 = None if x0 is None else self.check_point(x0, "x0")
+
+    # -- parameters and bounds ---------------------------------------------------------------
+    @property
+    def bounded(self) -> bool:
+        """Whether any bound is set."""
+        return self.lower is not None or self.upper is not None
+
+    @property
+    def stochastic(self) -> bool:
+        """Whether a stochastic ``value_and_grad`` replaces the full objective."""
+        return self.value_and_grad is not None
+
+    def check_point(self, x, what: str = "x") -> np.ndarray:
+        """``x`` as a fresh array of the parameter shape and dtype, checked against the bounds."""
+        x = np.asarray(x)
+        if x.size != int(np.prod(self.dims)):
+            raise ValueError(f"{what} has shape {x.shape}, the parameters have shape {self.dims}")
+        x = np.array(x.reshape(self.dims), dtype=self.dtype)
+        if not np.all(np.isfinite(x)):
+            raise ValueError(f"{what} contains NaN or infinite values")
+        if not np.array_equal(self.project(x), x):
+            raise ValueError(f"{what} violates the bounds; start inside them "
+                             "(e.g. problem.project(x0))")
+        return x
+
+    def project(self, x) -> np.ndarray:
+        """Projection onto the box ``lower <= x <= upper`` (identity when unbounded)."""
+        if not self.bounded:
+            return np.asarray(x)
+        lo = -np.inf if self.lower is None else self.lower
+        hi = np.inf if self.upper is None else self.upper
+        return np.clip(x, lo, hi).astype(self.dtype, copy=False)
+
+    def projected_gradient(self, x, grad) -> np.ndarray:
+        """The gradient with components pushing out of an active bound set to zero."""
+        grad = np.array(grad)
+        if self.lower is not None:
+            grad[(x <= self.lower) & (grad > 0)] = 0
+        if self.upper is not None:
+            grad[(x >= self.upper) & (grad < 0)] = 0
+        return grad
+
+    # -- objective -----------------------------------------------------------------------------
+    def evaluate(self, x, iteration: int = 0, seed: int = 0) -> Evaluation:
+        """The objective at ``x``; gradient computed on demand (one reverse pass).
+
+        ``iteration`` and ``seed`` only matter for a stochastic ``value_and_grad``.
+        """
+        if self.stochastic:
+            loss, grad = self.value_and_grad(x, iteration, np.random.default_rng([seed,
+                                                                                 iteration]))
+            grad = np.asarray(grad, dtype=self.dtype).reshape(self.dims)
+            return Evaluation(loss, np.nan, np.nan, grad=grad, sample=iteration)
+        jf = self.forward.linearize(x)
+        residual = jf.value - self.data
+        misfit = sum_of_squares(residual)
+        reg, jk, z = 0.0, None, None
+        if self.regularizer is not None:
+            jk = self.regularizer.operator.linearize(x)
+            z = jk.value
+            reg = float(self.regularizer.functional(z))
+
+        def grad():
+            g = 2.0 * jf.vjp(None, residual)
+            if jk is not None and self.lam > 0:
+                g = g + self.lam * jk.vjp(None, self.regularizer.functional.grad(z))
+            return np.asarray(g, dtype=self.dtype).reshape(self.dims)
+
+        return Evaluation(misfit + self.lam * reg, misfit, reg, grad_fn=grad,
+                          forward_jacobian=jf, regularizer_jacobian=jk)
+
+    def objective(self, x) -> float:
+        """:math:`L(x)` (the full, deterministic objective)."""
+        r = self.forward(x) - self.data
+        reg = 0.0 if self.regularizer is None else self.regularizer(x)
+        return sum_of_squares(r) + self.lam * reg
+
+    def __repr__(self) -> str:
+        return (f"<Problem {self.name}: kind={self.kind}, params {self.dims}, data "
+                f"{self.forward.dimsd}, regularizer={self.regularizer}, lam={self.lam:g}, "
+                f"bounded={self.bounded}, stochastic={self.stochastic}>")

@@ -1,0 +1,66 @@
+"""Stopping rules shared by all solvers."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+
+def _check_tolerance(name, value):
+    if value is not None and not value >= 0:
+        raise ValueError(f"{name} must be None (off) or >= 0, got {value}")
+
+
+@dataclass(frozen=True)
+class StoppingRule:
+    """When to stop; each rule is off when None.
+
+    Parameters
+    ----------
+    max_iter : int
+        Maximum number of iterations in total (a resumed run counts those done before).
+    rtol_loss : float, optional
+        Stop when :math:`|L_k - L_{k-1}| \\le \\text{rtol}\\,|L_{k-1}|`.
+    rtol_x : float, optional
+        Stop when :math:`\\|\\theta_k - \\theta_{k-1}\\| \\le \\text{rtol}\\,\\|\\theta_{k-1}\\|`.
+    gtol : float, optional
+        Stop when the norm of the projected gradient is at most ``gtol`` (loss units per
+        parameter unit).
+    time_budget : float, optional
+        Wall-clock seconds one call to ``run`` may take; checked between iterations.
+    """
+
+    max_iter: int = 100
+    rtol_loss: float | None = None
+    rtol_x: float | None = None
+    gtol: float | None = None
+    time_budget: float | None = None
+
+    def __post_init__(self):
+        if int(self.max_iter) != self.max_iter or self.max_iter < 0:
+            raise ValueError(f"max_iter must be a non-negative integer, got {self.max_iter}")
+        for name in ("rtol_loss", "rtol_x", "gtol", "time_budget"):
+            _check_tolerance(name, getattr(self, name))
+
+    def as_dict(self) -> dict:
+        """The rules as a plain dict."""
+        return asdict(self)
+
+    def budget_spent(self, iteration: int, call_seconds: float) -> str | None:
+        """Reason to stop before the next iteration (iteration count or time), or None."""
+        if iteration >= self.max_iter:
+            return f"max_iter: reached {self.max_iter} iterations"
+        if self.time_budget is not None and call_seconds >= self.time_budget:
+            return f"time_budget: {call_seconds:.3g} s >= {self.time_budget:g} s"
+        return None
+
+    def converged(self, loss: float, previous_loss: float, step_ratio: float,
+                  grad_norm: float) -> str | None:
+        """Reason to stop after an iteration with these values, or None."""
+        if self.gtol is not None and grad_norm <= self.gtol:
+            return f"gtol: gradient norm {grad_norm:.3e} <= {self.gtol:g}"
+        if self.rtol_loss is not None and abs(loss - previous_loss) <= self.rtol_loss * abs(
+                previous_loss):
+            return f"rtol_loss: relative loss change <= {self.rtol_loss:g}"
+        if self.rtol_x is not None and step_ratio <= self.rtol_x:
+            return f"rtol_x: relative parameter change {step_ratio:.3e} <= {self.rtol_x:g}"
+        return None
