@@ -10,9 +10,9 @@ import argparse
 import sys
 
 from invflame import __version__
-from invflame.cli import co2, demo, lines
+from invflame.cli import co2, demo, lines, phantom
 
-COMMANDS = [demo, lines, co2]
+COMMANDS = [demo, phantom, lines, co2]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,302 @@
+"""Flame state on a voxel grid: temperature and mole fractions, with validation and ``.npz`` I/O.
+
+A :class:`Field` is what the ground truth, the synthetic phantoms and the reconstructions have in
+common: a :class:`~invflame.geometry.VoxelGrid`, one float32 array of shape
+``(4, nx, ny, nz)`` holding ``T`` [K], ``X_CO2``, ``X_H2O``, ``X_CH4`` (mole fractions, 1) in that
+order, and a metadata dict (provenance: solver, case, time, seed, ...).
+
+Resampling to another grid averages cells with molar-density weights ``c = p / (R T)`` (uniform
+pressure), see :func:`resample_values`: the coarse cell then holds the same number of moles of
+every species, and of gas in total, as the fine cells it covers.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from invflame.geometry import VoxelGrid
+
+FIELD_NAMES = ("T", "CO2", "H2O", "CH4")
+"""Order of the fields along axis 0 of :attr:`Field.values`: T [K], then mole fractions."""
+
+SPECIES = FIELD_NAMES[1:]
+"""Species whose mole fractions a field carries."""
+
+_SUM_TOLERANCE = 1e-5  # float32 rounding allowance on sum(X) <= 1
+
+
+def validate_values(values: np.ndarray, grid: VoxelGrid) -> None:
+    """Check a field array against a grid; raise ``ValueError`` saying what is wrong.
+
+    Parameters
+    ----------
+    values : numpy.ndarray, shape (4, nx, ny, nz)
+        ``T`` [K] then mole fractions of CO2, H2O, CH4 [1].
+    grid : VoxelGrid
+        Grid whose ``shape`` must be ``(nx, ny, nz)``.
+    """
+    expected = (len(FIELD_NAMES), *grid.shape)
+    if values.shape != expected:
+        raise ValueError(
+            f"field values must have shape {expected} = (fields {FIELD_NAMES}, *grid.shape); "
+            f"got {values.shape}"
+        )
+    bad = ~np.isfinite(values)
+    if bad.any():
+        names = [FIELD_NAMES[i] for i in np.unique(np.nonzero(bad)[0])]
+        raise ValueError(f"field values contain NaN or inf in {names} ({int(bad.sum())} entries)")
+    t_min = float(values[0].min())
+    if t_min <= 0:
+        raise ValueError(f"temperature must be > 0 K everywhere; minimum is {t_min} K")
+    for i, name in enumerate(SPECIES, start=1):
+        lo, hi = float(values[i].min()), float(values[i].max())
+        if lo < 0 or hi > 1:
+            raise ValueError(
+                f"mole fraction X_{name} must lie in [0, 1]; got range [{lo}, {hi}] "
+                "(clip round-off before building the field)"
+            )
+    total = float(values[1:].sum(axis=0).max())
+    if total > 1 + _SUM_TOLERANCE:
+        raise ValueError(
+            f"mole fractions of {SPECIES} must sum to at most 1; maximum sum is {total}"
+        )
+
+
+class Field:
+    """Temperature and mole fractions of CO2, H2O, CH4 on a voxel grid.
+
+    Parameters
+    ----------
+    grid : VoxelGrid
+        Grid of the voxels (m).
+    values : array_like, shape (4, nx, ny, nz)
+        ``T`` [K], ``X_CO2``, ``X_H2O``, ``X_CH4`` [1] per voxel, indexed ``[field, ix, iy, iz]``;
+        stored as float32 (read-only).
+    metadata : dict, optional
+        JSON-serialisable provenance (solver, version, case, time in s, seed, ...).
+
+    Raises
+    ------
+    ValueError
+        If the shape does not match the grid, a value is not finite, ``T <= 0``, a mole
+        fraction is outside [0, 1] or the mole fractions sum to more than 1.
+    """
+
+    names = FIELD_NAMES
+
+    def __init__(self, grid: VoxelGrid, values, metadata: dict | None = None) -> None:
+        if not isinstance(grid, VoxelGrid):
+            raise TypeError(f"grid must be an invflame.geometry.VoxelGrid; got {type(grid)}")
+        arr = np.array(values, dtype=np.float32)
+        validate_values(arr, grid)
+        arr.setflags(write=False)
+        self.grid = grid
+        self.values = arr
+        self.metadata = dict(metadata or {})
+
+    def __repr__(self) -> str:
+        return f"Field(shape={self.grid.shape}, names={self.names}, metadata={self.metadata})"
+
+    @property
+    def T(self) -> np.ndarray:  # noqa: N802 - physics symbol
+        """Temperature in K, shape ``(nx, ny, nz)``."""
+        return self.values[0]
+
+    def X(self, species: str) -> np.ndarray:  # noqa: N802 - physics symbol
+        """Mole fraction of ``species`` ("CO2", "H2O" or "CH4"), shape ``(nx, ny, nz)``, 1."""
+        if species not in SPECIES:
+            raise KeyError(f"unknown species {species!r}; a field carries {SPECIES}")
+        return self.values[FIELD_NAMES.index(species)]
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        """Field by name: "T" (K) or a species (mole fraction)."""
+        return self.T if name == "T" else self.X(name)
+
+    def resample(self, grid: VoxelGrid) -> Field:
+        """This field averaged onto ``grid`` (see :func:`resample_values`).
+
+        Parameters
+        ----------
+        grid : VoxelGrid
+            Target grid; its box must lie inside this field's box.
+        """
+        meta = {**self.metadata, "resampled_from": list(self.grid.shape)}
+        return Field(grid, resample_values(self.values, self.grid, grid), meta)
+
+    def summary(self) -> str:
+        """Min / max / mean of each field and the extent of ``T > 500 K`` as text."""
+        lines = [f"grid {self.grid.shape} over {self.grid.lower} .. {self.grid.upper} m"]
+        for name, v in zip(FIELD_NAMES, self.values, strict=True):
+            mean = v.mean(dtype=np.float64)
+            lines.append(f"{name:>4}: min {v.min():.6g}  max {v.max():.6g}  mean {mean:.6g}")
+        lo, hi = hot_extent(self, 500.0)
+        if lo is not None:
+            lines.append(f"T > 500 K within {np.round(lo, 4)} .. {np.round(hi, 4)} m")
+        return "\n".join(lines)
+
+    def save(self, path) -> Path:
+        """Write to a compressed ``.npz`` atomically (temporary file, then rename).
+
+        The archive holds ``values`` (float32), ``names``, ``lower``/``upper``/``spacing`` (m),
+        ``shape``, ``up_axis`` and ``metadata`` (JSON text).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            Destination; parent folders are created.
+
+        Returns
+        -------
+        pathlib.Path
+            The path written.
+        """
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+        try:
+            with os.fdopen(fd, "wb") as fh:
+                np.savez_compressed(
+                    fh,
+                    values=self.values,
+                    names=np.array(FIELD_NAMES),
+                    lower=self.grid.lower,
+                    upper=self.grid.upper,
+                    spacing=self.grid.spacing,
+                    shape=np.array(self.grid.shape),
+                    up_axis=np.array(self.grid.up_axis),
+                    metadata=np.array(json.dumps(self.metadata)),
+                )
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates the file private (0600)
+            os.replace(tmp, path)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
+        return path
+
+    @classmethod
+    def load(cls, path) -> Field:
+        """Read a field written by :meth:`save`; validates it.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            ``.npz`` file.
+
+        Raises
+        ------
+        ValueError
+            If the file lacks an entry, has other field names, or fails validation.
+        """
+        with np.load(path, allow_pickle=False) as data:
+            missing = {"values", "names", "lower", "upper", "shape", "up_axis"} - set(data.files)
+            if missing:
+                raise ValueError(f"{path} is not an invflame field file: missing {sorted(missing)}")
+            names = tuple(str(n) for n in data["names"])
+            if names != FIELD_NAMES:
+                raise ValueError(f"{path} holds fields {names}; expected {FIELD_NAMES}")
+            grid = VoxelGrid(
+                data["lower"],
+                data["upper"],
+                tuple(int(n) for n in data["shape"]),
+                up_axis=int(data["up_axis"]),
+            )
+            meta = json.loads(str(data["metadata"])) if "metadata" in data.files else {}
+            try:
+                return cls(grid, data["values"], meta)
+            except ValueError as err:
+                raise ValueError(f"{path}: {err}") from err
+
+
+def hot_extent(field: Field, threshold: float) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Bounding box of the voxel centres where ``T > threshold``.
+
+    Parameters
+    ----------
+    field : Field
+        Field to inspect.
+    threshold : float
+        Temperature in K.
+
+    Returns
+    -------
+    (lower, upper) : numpy.ndarray, shape (3,), in m, or ``(None, None)`` if no voxel is hotter.
+    """
+    hot = field.T > threshold
+    if not hot.any():
+        return None, None
+    axes = field.grid.axes()
+    lo, hi = [], []
+    for a in range(3):
+        other = tuple(b for b in range(3) if b != a)
+        idx = np.nonzero(hot.any(axis=other))[0]
+        lo.append(axes[a][idx[0]])
+        hi.append(axes[a][idx[-1]])
+    return np.array(lo), np.array(hi)
+
+
+def _overlap_matrix(src_edges: np.ndarray, dst_edges: np.ndarray) -> np.ndarray:
+    """Overlap lengths ``W[j, i]`` of destination cell j with source cell i along one axis (m)."""
+    lo = np.maximum(dst_edges[:-1, None], src_edges[None, :-1])
+    hi = np.minimum(dst_edges[1:, None], src_edges[None, 1:])
+    return np.clip(hi - lo, 0.0, None)
+
+
+def resample_values(values: np.ndarray, src: VoxelGrid, dst: VoxelGrid) -> np.ndarray:
+    """Average a field array from grid ``src`` onto grid ``dst`` by cell overlap.
+
+    Each destination voxel gets the overlap-weighted average of the source voxels it covers,
+    weighted by their molar density ``c = p / (R T)`` at uniform pressure:
+
+    .. math::  \\bar T = \\frac{\\sum_i w_i c_i T_i}{\\sum_i w_i c_i}
+               = \\frac{\\sum_i w_i}{\\sum_i w_i / T_i}, \\qquad
+               \\bar X_s = \\frac{\\sum_i w_i c_i X_{s,i}}{\\sum_i w_i c_i},
+
+    with ``w_i`` the overlap volume. So the destination voxel (at ``p`` and ``\\bar T``) holds the
+    same moles of gas and of each species as the source voxels: number densities, which set the
+    absorption, are conserved. The temperature is the harmonic (molar) mean, a little below
+    the volume mean where the temperature varies within a voxel. For integer coarsening
+    factors on the same box this is block averaging; refining copies values (piecewise
+    constant).
+
+    Parameters
+    ----------
+    values : numpy.ndarray, shape (4, *src.shape)
+        ``T`` [K] then mole fractions.
+    src, dst : VoxelGrid
+        Source and destination grids; ``dst``'s box must lie inside ``src``'s.
+
+    Returns
+    -------
+    numpy.ndarray, shape (4, *dst.shape), float32
+    """
+    tol = 1e-9 * float(np.max(src.extent))
+    if np.any(dst.lower < src.lower - tol) or np.any(dst.upper > src.upper + tol):
+        raise ValueError(
+            f"target box {dst.lower} .. {dst.upper} m must lie inside the source box "
+            f"{src.lower} .. {src.upper} m; resampling does not extrapolate"
+        )
+    if src.up_axis != dst.up_axis:
+        raise ValueError(f"up_axis differs: source {src.up_axis}, target {dst.up_axis}")
+    mats = []
+    for a in range(3):
+        src_edges = np.linspace(src.lower[a], src.upper[a], src.shape[a] + 1)
+        dst_edges = np.linspace(dst.lower[a], dst.upper[a], dst.shape[a] + 1)
+        mats.append(_overlap_matrix(src_edges, dst_edges))
+
+    def average(a: np.ndarray) -> np.ndarray:
+        return np.einsum("ai,bj,ck,ijk->abc", *mats, a, optimize=True)
+
+    v = values.astype(np.float64)
+    density = 1.0 / v[0]  # molar density up to the constant p / R
+    weight = average(density)
+    out = np.empty((len(FIELD_NAMES), *dst.shape))
+    out[0] = average(np.ones_like(density)) / weight
+    out[1:] = np.stack([average(density * x) for x in v[1:]]) / weight
+    return out.astype(np.float32)
