@@ -18,17 +18,33 @@ Sources
         q = (2B²/ω2)·[1 + 4 Σ_k ζ_2k² ω2²/(ω_k² − ω2²)]. For CO₂ only ζ_23 = 1 contributes
         (ν1 is σg, ν2 πu, ν3 σu).
 [JV90]  Band intensity of 01101←00001 at 296 K, 7.9 × 10⁻¹⁸ cm/molecule including the natural
-        abundance: the HITRAN 626 ν2 band sum (Rothman et al. 1992, JQSRT 48, 537), consistent
-        with the absolute measurements of J. W. C. Johns and J. Vander Auwera, J. Mol.
-        Spectrosc. 140, 71–102 (1990). With it the fundamental's R(30)e line of HITRAN is
+        abundance, quoted as the HITRAN 626 ν2 band sum (Rothman et al. 1992, JQSRT 48, 537)
+        and consistent with the absolute measurements of J. W. C. Johns and J. Vander Auwera,
+        J. Mol. Spectrosc. 140, 71–102 (1990). The number has not been checked against either
+        paper (neither was reachable); with it the fundamental's R(30)e line of HITRAN is
         reproduced to −6 % (no Herman–Wallis factor is applied).
+[GM66]  H. R. Gordon and T. K. McCubbin Jr., "The 2.8-micron bands of CO₂", J. Mol. Spectrosc.
+        19, 137 (1966): anharmonicity constant x33 = −12.50 cm⁻¹, used for v3 = 2 levels
+        (the [RY81] levels have v3 ≤ 1 and cannot fix it; with it 00021 comes out at
+        4673.3 cm⁻¹).
+[C79]   A. Chédin, "The carbon dioxide molecule: potential, spectroscopic, and molecular
+        constants from its infrared spectrum", J. Mol. Spectrosc. 76, 430–491 (1979): the form
+        of the effective vibrational Hamiltonian of :mod:`invflame.spectroscopy.co2_levels`
+        (Dunham-type diagonal terms, Fermi coupling with vibrational dependence); its
+        constants are fitted there to the [RY81] term values, not taken from [C79].
 [HIT]   HITRAN natural abundance of ¹²C¹⁶O₂, 0.984204 (Gordon et al. 2022, JQSRT 277, 107949).
 [GL13]  R. R. Gamache and J. Lamouroux, "Predicting accurate line shape parameters for CO₂
         transitions", JQSRT 130, 158–171 (2013): the half-widths adopted in HITRAN for CO₂
         depend on the rotational index |m| (m = −J'' in P, J'' in Q, J''+1 in R) and hardly on
         the band. :data:`BROADENING` holds smooth least-squares fits to those HITRAN 626 values
         (γ_air, γ_self at 296 K in cm⁻¹/atm; n_air) over 2 ≤ |m| ≤ 100, sampled from the HITRAN
-        lines at 691.4–692.7 cm⁻¹; rms residuals 0.0002, 0.0005 cm⁻¹/atm and 0.009.
+        lines at 691.4–692.7 cm⁻¹; rms residuals 0.0002, 0.0005 cm⁻¹/atm and 0.009. These fits
+        are derived from HITRAN values, not from a published |m| formula (none could be
+        consulted: Rosenmann et al. 1988, Appl. Opt. 27, 3902, and the HITRAN 2008 CO₂
+        description, Rothman et al. 2009, JQSRT 110, 533, are the sources to replace them with).
+
+Levels not in :data:`LEVELS` (v2 ≥ 6, polyads 2v1 + v2 ≥ 6, v3 = 2, …) come from the effective
+Hamiltonian of :mod:`invflame.spectroscopy.co2_levels`, fitted to :data:`LEVELS`.
 
 The levels at 3181–3500 cm⁻¹ are assigned to the HITRAN labels (21103, 13302, 21102, 05501,
 13301, 21101) by checking which term values reproduce the HITRAN line positions.
@@ -56,6 +72,9 @@ OMEGA2 = 667.38
 
 OMEGA3 = 2349.14
 """ν3 fundamental wavenumber, cm⁻¹ (G of 00011 in [RY81]); used in the ℓ-doubling estimate."""
+
+X33 = -12.50
+"""Anharmonicity constant x33 of ν3, cm⁻¹ [GM66]; only levels with v3 ≥ 2 depend on it."""
 
 
 @dataclass(frozen=True)

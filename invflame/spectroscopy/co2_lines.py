@@ -3,30 +3,30 @@
 No CO₂ line list for 650–725 cm⁻¹ ships with the package, so :func:`generate_co2_lines` builds one
 from published constants (:mod:`invflame.spectroscopy.co2_constants`, which cites each of them):
 
-Positions
-    Every vibrational level of :data:`co2_constants.LEVELS` (Rothman & Young 1981, up to
-    3715 cm⁻¹) has e-parity term values E_e(J) = G + B·x − D·x² + H·x³, x = J(J+1). The f levels of
-    ℓ = 1 states lie higher by q_eff·x (ℓ-type doubling), with q_eff = q·Σ c_i²(v2_i + 1)/2 over
-    the normal-mode basis states of the level (Herzberg's (v2 + 1) scaling; c_i from the Fermi
-    mixing below) and q the second-order value 2B²/ω2·[1 + 4ω2²/(ω3² − ω2²)] = 6.17 × 10⁻⁴ cm⁻¹.
-    ℓ ≥ 2 levels are taken as e/f degenerate.
+Levels and positions
+    :mod:`invflame.spectroscopy.co2_levels`: the 25 levels tabulated by Rothman & Young (1981,
+    up to 3715 cm⁻¹) with their published constants, and every other level of the Fermi
+    polyads 2v1 + v2 ≤ 9, v3 ≤ 2 below 9000 cm⁻¹ (v2 up to 9; 30004…30001, 22203…, 14402/14401,
+    06601, 07701, 08801, 11112/11111, 21113…, 00021, …: 172 levels in all) from an effective
+    Hamiltonian fitted to the published term values and rotational constants. f levels of
+    ℓ = 1 states lie q_eff·J(J+1) above the e levels.
 Nuclear spin statistics
     ¹⁶O has spin 0, so only rovibrational levels symmetric under exchange of the O nuclei exist:
     a level of parity label e (f) exists when (−1)^(J + v2 + v3) = +1 (−1). Σg⁺ states such as
     00001 keep only even J; each J of an ℓ > 0 state keeps one of e/f; all statistical weights
     are g = 2J + 1.
 Band system and intensities
-    All bands between these levels with Δv2 = +1, Δℓ = ±1 (perpendicular, ΔΛ = ±1: Σ–Π, Π–Δ,
-    Π–Σ, Δ–Φ, …), v1 and v3 unchanged in the basis. Fermi polyads (10002/10001, 11102/11101, …,
-    20003/20002/20001, 21103/21102/21101) are expanded in normal-mode basis states: dyad
-    fractions from the sum rule of their B constants, triads from a Fermi matrix whose coupling
-    ratios follow the harmonic matrix elements √(v1+1)·√(v2² − ℓ²)/2. Transition amplitudes
-    are the harmonic bending matrix elements √((v2 ± ℓ + 2)/2) in units of the fundamental's,
-    summed over basis states (so Fermi interference between 10002/10001 and 11102/11101
-    bands is kept). Line strengths use Hönl–London factors (2J''+1)·⟨J'' ℓ''; 1 Δℓ | J' ℓ'⟩²,
-    a factor 2 when one level is a Σ state (both ±ℓ components reach it), the Boltzmann factor
-    and stimulated emission; the absolute scale is set by the published 296 K band intensity of
-    01101←00001, which all other bands inherit through the matrix elements.
+    All bands with Δv2 = +1, Δℓ = ±1 (perpendicular, ΔΛ = ±1: Σ–Π, Π–Δ, Π–Σ, Δ–Φ, …) between a
+    lower level below :data:`MAX_LOWER_ENERGY` and a level of the next polyad with the same v3,
+    v1 and v3 unchanged in the normal-mode basis (≈ 490 bands, among them the ν3 = 1 and 2 hot
+    bands 01111←00011, 11111/11112←10011/10012, 01121←00021, …). Transition amplitudes are the
+    harmonic bending matrix elements √((v2 ± ℓ + 2)/2) in units of the fundamental's, summed
+    over the Fermi compositions of both levels (so Fermi interference, e.g. between the
+    10002/10001 and 11102/11101 bands, is kept). Line strengths use Hönl–London factors
+    (2J''+1)·⟨J'' ℓ''; 1 Δℓ | J' ℓ'⟩², a factor 2 when one level is a Σ state (both ±ℓ
+    components reach it), the Boltzmann factor and stimulated emission; the absolute scale is
+    set by the 296 K band intensity of 01101←00001, which all other bands inherit through the
+    matrix elements.
 Line shape parameters
     γ_air, γ_self and n_air are the |m|-dependent fits of :data:`co2_constants.BROADENING`;
     δ_air is 0. The Einstein A follows from S(296) with the TIPS partition function Q(296 K)
@@ -36,19 +36,21 @@ What the list misses compared with HITEMP2010 / CDSD-4000
 ---------------------------------------------------------
 * Other isotopologues (636, 628, 627, … together ≈ 1.6 % of CO₂, their bands shifted by up to
   ~20 cm⁻¹, e.g. the 636 ν2 Q branch at 648.5 cm⁻¹).
-* Weak and high bands: levels above 3715 cm⁻¹ (v2 ≥ 6, v1 + v2 ≥ 4 polyads, v3 ≥ 2, the 00011
-  ladder beyond 02211/10012/10011), Δv2 = 3 and "forbidden" bands, and Δℓ = 0 combinations.
-  At flame temperatures these hot bands hold a growing share of the 15 µm emission
-  (see the validation script for the measured shortfall at 1000 and 1500 K).
-* Positions: the effective constants are fitted to J ≲ 60–80; positions drift by a few
-  10⁻² cm⁻¹ at J ≈ 100. No J-dependence of q, no ℓ-doubling of Δ and Φ states and no ℓ-type
-  resonance (Δℓ = ±2, e.g. 03301 with the f levels of 11101/11102): f-level lines of 11101
-  come out 0.12–0.22 cm⁻¹ low at J = 50–63, those of 12201 up to 0.9 cm⁻¹ at J ≈ 85. The
-  Rothman–Young term values of the weakest levels (e.g. 05501) are off by up to 0.09 cm⁻¹.
+* High levels: polyads 2v1 + v2 ≥ 10 (v2 ≥ 10), v3 ≥ 3, lower levels above 7000 cm⁻¹ (their
+  Boltzmann factor is < 2 % at 2500 K, but their number grows fast), Δv2 = 3 and "forbidden"
+  bands (ΔP ≠ 1 between polyads, Δℓ = 0 combinations, bands that borrow intensity through
+  ℓ-type or Coriolis resonance, e.g. 03301←10002).
+* Positions of model levels: their term values are extrapolated from levels below 3715 cm⁻¹
+  (the effective Hamiltonian reproduces the published term values to 0.05 cm⁻¹ and their
+  J ≤ 60 rotational levels to 0.3 cm⁻¹; extrapolated band lines come out a few 10⁻² to 0.3
+  cm⁻¹ off at J ≈ 30–70). Tabulated constants are fitted to J ≲ 60–80 and drift by a few
+  10⁻² cm⁻¹ at J ≈ 100. No J-dependence of q beyond the Fermi mixing, no ℓ-doubling of Δ and
+  Φ states and no ℓ-type resonance (Δℓ = ±2): f-level lines of 11101 come out 0.07–0.14 cm⁻¹
+  low at J = 50–63, Q lines of 12201←11101 up to 0.9 cm⁻¹ low at J ≈ 85 (the e levels of
+  12201 are pushed by the Σ levels of its polyad, the f levels are not).
 * Intensities: harmonic matrix elements, no Herman–Wallis factors, no electrical
-  anharmonicity beyond what the Fermi mixing carries, no intensity borrowing through
-  Coriolis or ℓ-type resonances; Fermi mixing from a two-constant model, not the full
-  effective Hamiltonian of CDSD.
+  anharmonicity beyond what the Fermi mixing carries (bands between Fermi-mixed levels are up
+  to 20–35 % off, e.g. 20001←11101 +16 %, 30001←21101 +32 %).
 * Line shapes: no band dependence of broadening, no pressure shifts, no line mixing (which
   matters in the strong Q branches at 618, 667 and 721 cm⁻¹), no self-broadening temperature
   exponent.
@@ -62,6 +64,7 @@ from functools import cache
 import numpy as np
 
 from invflame.spectroscopy import co2_constants as const
+from invflame.spectroscopy.co2_levels import Basis, Level, levels, term_value
 from invflame.spectroscopy.linelist import LineList
 from invflame.spectroscopy.partition import partition_function
 
@@ -76,154 +79,6 @@ T_REF = 296.0
 
 J_MAX_LIMIT = 200
 """Largest accepted J_max (the effective constants are fitted far below it)."""
-
-Basis = tuple[int, int, int, int]
-"""Normal-mode basis state (v1, v2, ℓ, v3)."""
-
-
-@dataclass(frozen=True)
-class Level:
-    """A vibrational level: label, quantum numbers and its normal-mode composition.
-
-    Attributes
-    ----------
-    label : str
-        Five-digit HITRAN label v1 v2 ℓ v3 r, e.g. ``"10002"``.
-    v1, v2, l, v3, r : int
-        Quantum numbers of the label.
-    composition : tuple of (float, Basis)
-        Expansion coefficients over normal-mode basis states (sum of squares 1).
-    """
-
-    label: str
-    v1: int
-    v2: int
-    l: int  # noqa: E741 - ℓ2 is the spectroscopic name
-    v3: int
-    r: int
-    composition: tuple[tuple[float, Basis], ...]
-
-    @property
-    def constants(self) -> const.LevelConstants:
-        """The [RY81] term value and rotational constants of this level."""
-        return const.LEVELS[self.label]
-
-    @property
-    def hitran_v(self) -> str:
-        """The 15-character HITRAN 2004 global quanta field, e.g. ``'       0 1 1 01'``."""
-        return f"       {self.v1} {self.v2} {self.l} {self.v3}{self.r}"
-
-
-def l_doubling_constant() -> float:
-    """Second-order ℓ-type doubling constant q of the ν2 bending state, cm⁻¹ (Herzberg 1945)."""
-    b0 = const.LEVELS["00001"].B
-    w2, w3 = const.OMEGA2, const.OMEGA3
-    return 2.0 * b0**2 / w2 * (1.0 + 4.0 * w2**2 / (w3**2 - w2**2))
-
-
-def _parse_label(label: str) -> tuple[int, int, int, int, int]:
-    v1, v2, l, v3, r = (int(c) for c in label)  # noqa: E741
-    return v1, v2, l, v3, r
-
-
-def _polyad_basis(v1: int, v2: int, l: int, v3: int) -> list[Basis]:  # noqa: E741
-    """Normal-mode states of the Fermi polyad of a level, highest v1 first."""
-    n = v1 + (v2 - l) // 2  # polyad index: members share 2·v1 + v2 and ℓ
-    return [(k, 2 * (n - k) + l, l, v3) for k in range(n, -1, -1)]
-
-
-def _dyad_fraction(lower: str, upper: str) -> float:
-    """Share of the (0, v2+2) basis state in the lower member of a Fermi dyad (B sum rule).
-
-    B is linear in the composition: B_lower − B_upper = (2f − 1)·ΔB°, where ΔB° is the
-    unperturbed B difference of the basis states, taken from the 10002/10001 dyad with
-    B°(02⁰0) extrapolated from the mean B of 01101.
-    """
-    levels = const.LEVELS
-    b_mean_01101 = levels["01101"].B + 0.5 * l_doubling_constant()
-    b_020 = levels["00001"].B + 2.0 * (b_mean_01101 - levels["00001"].B)
-    b_100 = levels["10002"].B + levels["10001"].B - b_020
-    delta_b = b_020 - b_100
-    f = 0.5 + (levels[lower].B - levels[upper].B) / (2.0 * delta_b)
-    return float(np.clip(f, 0.0, 1.0))
-
-
-def _fermi_coupling_factor(a: Basis, b: Basis) -> float:
-    """Harmonic Fermi matrix element between neighbouring basis states, in units of W."""
-    big, small = (a, b) if a[1] > b[1] else (b, a)
-    return 0.5 * np.sqrt(big[1] ** 2 - big[2] ** 2) * np.sqrt(big[0] + 1)
-
-
-def _triad_vectors(basis: list[Basis], energies: np.ndarray) -> np.ndarray:
-    """Eigenvectors of a Fermi triad whose eigenvalues match ``energies`` (ascending).
-
-    Model: diagonal c + δ·(v1 − 1), couplings −W × harmonic factors. c is the mean of the
-    observed energies; W and δ are solved from the two observed spacings.
-    """
-    from scipy.optimize import least_squares
-
-    factors = np.array([_fermi_coupling_factor(basis[i], basis[i + 1]) for i in range(2)])
-    v1 = np.array([b[0] for b in basis], dtype=float)
-
-    def hamiltonian(p):
-        w, delta = p
-        h = np.diag(energies.mean() + delta * (v1 - 1.0))
-        h[0, 1] = h[1, 0] = -w * factors[0]
-        h[1, 2] = h[2, 1] = -w * factors[1]
-        return h
-
-    def residual(p):
-        return np.linalg.eigvalsh(hamiltonian(p)) - energies
-
-    fit = least_squares(residual, x0=[50.0, 10.0], bounds=([0.0, -np.inf], [np.inf, np.inf]))
-    _, vectors = np.linalg.eigh(hamiltonian(fit.x))
-    return vectors
-
-
-@cache
-def levels() -> dict[str, Level]:
-    """All levels of :data:`co2_constants.LEVELS` with their Fermi compositions."""
-    out = {}
-    groups: dict[tuple[int, ...], list[str]] = {}
-    for label in const.LEVELS:
-        v1, v2, l, v3, _ = _parse_label(label)  # noqa: E741
-        groups.setdefault((2 * v1 + v2, l, v3), []).append(label)
-    for members in groups.values():
-        members = sorted(members, key=lambda s: const.LEVELS[s].G)
-        v1, v2, l, v3, _ = _parse_label(members[0])  # noqa: E741
-        basis = _polyad_basis(v1, v2, l, v3)
-        if len(basis) != len(members):
-            raise ValueError(
-                f"CO2 constants table is missing members of the Fermi polyad {members}: "
-                f"expected {len(basis)} levels"
-            )
-        if len(basis) == 1:
-            vectors = np.ones((1, 1))
-        elif len(basis) == 2:
-            f = _dyad_fraction(members[0], members[1])
-            vectors = np.array([[np.sqrt(1 - f), -np.sqrt(f)], [np.sqrt(f), np.sqrt(1 - f)]])
-        else:
-            energies = np.array([const.LEVELS[s].G for s in members])
-            vectors = _triad_vectors(basis, energies)
-        for k, label in enumerate(members):
-            comp = tuple((float(vectors[i, k]), basis[i]) for i in range(len(basis)))
-            out[label] = Level(label, *_parse_label(label), composition=comp)
-    return out
-
-
-def q_effective(level: Level) -> float:
-    """ℓ-doubling constant of an ℓ = 1 level, cm⁻¹ (E_f − E_e = q_eff·J(J+1)); 0 otherwise."""
-    if level.l != 1:
-        return 0.0
-    weight = sum(c**2 * (b[1] + 1) / 2.0 for c, b in level.composition)
-    return l_doubling_constant() * weight
-
-
-def term_value(level: Level, J: np.ndarray, parity_f: np.ndarray) -> np.ndarray:
-    """Rovibrational term value E(J, e/f), cm⁻¹, relative to 00001 J = 0."""
-    x = J * (J + 1.0)
-    k = level.constants
-    return k.G + k.B * x - k.D * x**2 + k.H * x**3 + np.where(parity_f, q_effective(level) * x, 0)
 
 
 def exists(level: Level, J: np.ndarray, parity_f: np.ndarray) -> np.ndarray:
@@ -334,14 +189,28 @@ def band_lines(lower: Level, upper: Level, J_max: int) -> BandLines:
     return BandLines(lower, upper, nu, e_low, J_low, J_up, branch, f_low, strength)
 
 
+MAX_LOWER_ENERGY = 7000.0
+"""Bands start from levels below this term value, cm⁻¹ (their Boltzmann factor at 2500 K is
+≥ 2 × 10⁻²)."""
+
+
 @cache
 def bands() -> tuple[tuple[str, str], ...]:
-    """(lower, upper) label pairs of every allowed Δv2 = +1, Δℓ = ±1 band among the levels."""
+    """(lower, upper) labels of every Δv2 = +1, Δℓ = ±1 band from levels below MAX_LOWER_ENERGY.
+
+    Upper levels lie in the polyad 2v1 + v2 one higher with the same v3; the band is kept when
+    its harmonic amplitude over the Fermi compositions is non-zero.
+    """
     lv = levels()
+    by_polyad: dict[tuple[int, int], list[Level]] = {}
+    for level in lv.values():
+        by_polyad.setdefault((level.polyad, level.v3), []).append(level)
     pairs = []
     for lo in lv.values():
-        for up in lv.values():
-            if up.constants.G > lo.constants.G and abs(band_amplitude(lo, up)) > 1e-12:
+        if lo.G > MAX_LOWER_ENERGY:
+            continue
+        for up in by_polyad.get((lo.polyad + 1, lo.v3), []):
+            if abs(up.l - lo.l) == 1 and abs(band_amplitude(lo, up)) > 1e-12:
                 pairs.append((lo.label, up.label))
     return tuple(pairs)
 

@@ -104,10 +104,22 @@ def compare(
     return Comparison(gen, ref, matched, inside[keep], tuple(float(t) for t in temperatures))
 
 
-def validate_against_par(path, nu_min: float = 691.38, nu_max: float = 692.68) -> Comparison:
-    """Generate lines around ``nu_min``–``nu_max`` (cm⁻¹) and compare with the ``.par`` file."""
+REFERENCE_S_MIN = 1e-30
+"""Intensity cutoff of the HITRAN CO₂ lists, S(296 K) in cm/molecule (the CDSD-296 cutoff adopted
+by HITRAN; Tashkun et al. 2015, JQSRT 152, 45). Lines below it are missing from the reference,
+so generated lines below it are left out of the comparison."""
+
+
+def validate_against_par(
+    path, nu_min: float = 691.38, nu_max: float = 692.68, S_min: float = REFERENCE_S_MIN
+) -> Comparison:
+    """Generate lines around ``nu_min``–``nu_max`` (cm⁻¹) and compare with the ``.par`` file.
+
+    ``S_min`` (cm/molecule at 296 K) drops generated lines weaker than the reference's cutoff;
+    pass 0 to compare every generated line.
+    """
     reference = read_par(path)
-    generated = generate_co2_lines(nu_min - 1.0, nu_max + 1.0, S_min=0.0)
+    generated = generate_co2_lines(nu_min - 1.0, nu_max + 1.0, S_min=S_min)
     return compare(generated, reference, nu_min, nu_max)
 
 
