@@ -22,20 +22,23 @@ def best_of(fun, repeats=7):
     return min(times)
 
 
-def main():
+def measure(dtype, n_rays=4096):
     eta = np.arange(650.0, 725.0 + 1e-9, 0.04)
-    n_rays = 4096
+    ils = op.ILSConvolution(eta, n_rays=n_rays, resolution=8.0, dtype=dtype)
+    x = np.random.default_rng(0).random(ils.dims).astype(dtype)
+    y = ils(x)
+    kernel = np.fft.rfft(np.fft.ifftshift(op.ils.triangular_ils(eta - eta.mean(), 8.0)))
+    t_fwd = best_of(lambda: ils(x))
+    t_adj = best_of(lambda: ils.vjp(None, y))
+    t_fft = best_of(lambda: np.fft.irfft(np.fft.rfft(x, axis=1) * kernel, eta.size, axis=1))
+    print(f"{np.dtype(dtype).name}: {n_rays} rays x {eta.size} -> {ils.dimsd[1]} points: "
+          f"forward {1e3 * t_fwd:.2f} ms, adjoint {1e3 * t_adj:.2f} ms, "
+          f"FFT convolution alone {1e3 * t_fft:.2f} ms")
+
+
+def main():
     for dtype in (np.float32, np.float64):
-        ils = op.ILSConvolution(eta, n_rays=n_rays, resolution=8.0, dtype=dtype)
-        x = np.random.default_rng(0).random(ils.dims).astype(dtype)
-        y = ils(x)
-        kernel = np.fft.rfft(np.fft.ifftshift(op.ils.triangular_ils(eta - eta.mean(), 8.0)))
-        t_fwd = best_of(lambda: ils(x))
-        t_adj = best_of(lambda: ils.vjp(None, y))
-        t_fft = best_of(lambda: np.fft.irfft(np.fft.rfft(x, axis=1) * kernel, eta.size, axis=1))
-        print(f"{np.dtype(dtype).name}: {n_rays} rays x {eta.size} -> {ils.dimsd[1]} points: "
-              f"forward {1e3 * t_fwd:.2f} ms, adjoint {1e3 * t_adj:.2f} ms, "
-              f"FFT convolution alone {1e3 * t_fft:.2f} ms")
+        measure(dtype)
 
 
 if __name__ == "__main__":

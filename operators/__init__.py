@@ -24,6 +24,13 @@ from operators.checks import (  # noqa: E402
     taylor_test,
 )
 from operators.derivatives import D_x, D_y, D_z, Gradient, derivative  # noqa: E402
+from operators.diagonal import Diagonal  # noqa: E402
+from operators.emission_rte import (  # noqa: E402
+    EmissionRTE,
+    RTETables,
+    emission_radiance,
+    emission_radiance_jvp,
+)
 from operators.functionals import (  # noqa: E402
     L1,
     Composite,
@@ -34,6 +41,8 @@ from operators.functionals import (  # noqa: E402
 )
 from operators.ils import ILSConvolution  # noqa: E402
 from operators.jax_operator import JaxOperator  # noqa: E402
+from operators.planck import planck  # noqa: E402
+from operators.sampling import VoxelSampling, sample_voxels  # noqa: E402
 from operators.tabulated import PiecewiseCubic  # noqa: E402
 from operators.torch_operator import TorchOperator  # noqa: E402
 
@@ -42,6 +51,8 @@ __all__ = [
     "D_x",
     "D_y",
     "D_z",
+    "Diagonal",
+    "EmissionRTE",
     "Functional",
     "Gradient",
     "ILSConvolution",
@@ -51,14 +62,20 @@ __all__ = [
     "LinearOperator",
     "Operator",
     "PiecewiseCubic",
+    "RTETables",
     "SquaredL2",
     "TorchOperator",
+    "VoxelSampling",
     "aslinearoperator",
     "block_diag",
     "derivative",
     "dottest",
+    "emission_radiance",
+    "emission_radiance_jvp",
     "gradient_taylor_test",
     "jacobian_dottest",
+    "planck",
+    "sample_voxels",
     "taylor_test",
     "tikhonov",
     "total_variation",

@@ -60,7 +60,7 @@ def slab_radiance(table, temperature: float, mole_fractions, length: float) -> n
     length : float
         Slab thickness in m.
     """
-    from invflame.spectroscopy.planck import planck
+    from operators.planck import planck
 
     kappa = table.kappa(np.asarray(temperature), np.asarray(mole_fractions, dtype=float))
     return planck(table.wavenumber, temperature) * -np.expm1(-kappa * length)
@@ -74,8 +74,8 @@ def run(args: argparse.Namespace) -> int:
     import matplotlib.pyplot as plt
 
     from invflame.spectroscopy.absorption_table import AbsorptionTable
-    from invflame.spectroscopy.planck import planck
     from operators.ils import ILSConvolution
+    from operators.planck import planck
 
     table = AbsorptionTable.default()
     eta = table.wavenumber

@@ -64,7 +64,7 @@ DEFAULTS: dict[str, Any] = {
     "noise": {"kind": "none", "snr": 100.0},
     "representation": {"kind": "voxel", "frequencies": 10, "hidden": 64, "layers": 4,
                        "coarse_samples": 32, "fine_samples": 32, "rays_per_batch": 1024,
-                       "pretrain_iterations": 300},
+                       "pretrain_iterations": 1000},
     "regularizer": {"kind": "none", "lambda": 1e-3},
     "solver": {"name": "adam", "iterations": 200, "options": {}},
     "init": {"kind": "noisy-truth", "noise": 0.2},

@@ -13,7 +13,7 @@ from invflame.spectroscopy.absorption_table import AbsorptionTable
 from invflame.spectroscopy.cross_section import cross_section, default_wavenumber
 from invflame.spectroscopy.hitran import fetch_hitran
 from invflame.spectroscopy.linelist import LineList, read_par, write_par
-from invflame.spectroscopy.planck import planck
+from operators.planck import planck
 
 __all__ = [
     "AbsorptionTable",

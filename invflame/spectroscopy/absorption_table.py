@@ -27,7 +27,7 @@ from invflame.spectroscopy.cross_section import WING_CUTOFF, cross_section, defa
 from invflame.spectroscopy.line_parameters import ATM
 from invflame.spectroscopy.linelist import LineList, read_par
 from invflame.spectroscopy.partition import hapi_module
-from invflame.spectroscopy.planck import planck
+from operators.planck import planck
 from operators.tabulated import PiecewiseCubic
 
 #: Species of every table, in the order of the field arrays (after temperature).

@@ -8,7 +8,7 @@ import pytest
 from invflame.cli import lines as lines_cli
 from invflame.spectroscopy.absorption_table import AbsorptionTable
 from invflame.spectroscopy.linelist import read_par
-from invflame.spectroscopy.planck import planck
+from operators.planck import planck
 
 
 @pytest.fixture(scope="module")

@@ -21,7 +21,7 @@ from invflame.spectroscopy.line_parameters import (
 )
 from invflame.spectroscopy.linelist import LineList, read_par
 from invflame.spectroscopy.partition import hapi_module, partition_function
-from invflame.spectroscopy.planck import planck
+from operators.planck import planck
 
 ATM = 101325.0
 

@@ -7,8 +7,8 @@ from scipy import constants
 from invflame.spectroscopy.absorption_table import AbsorptionTable, default_linelists
 from invflame.spectroscopy.cross_section import cross_section
 from invflame.spectroscopy.linelist import read_par
-from invflame.spectroscopy.planck import planck
 from invflame.spectroscopy.table_accuracy import spline_error
+from operators.planck import planck
 
 ATM = 101325.0
 GRID = 690.0 + 0.04 * np.arange(251)  # 690-700 cm-1, small and fast

@@ -1,0 +1,109 @@
+"""``invflame run``, ``invflame simulate`` and ``invflame plot``: one configuration at a time."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from invflame.experiments import config as configuration
+
+CONFIG_HELP = ("experiment configuration (TOML); every key has a default, see "
+               "invflame.experiments.config for the sections and allowed values")
+
+
+def add_parser(subparsers) -> None:
+    """Register ``run``, ``simulate`` and ``plot``."""
+    run = subparsers.add_parser(
+        "run", help="reconstruct the fields of one configuration",
+        description="Simulate the measurement of the configured ground truth, reconstruct it "
+        "with the configured representation, regularizer and solver, and write the fields, "
+        "history, metrics (summary.json), figures and a log into --out.")
+    run.add_argument("config", type=Path, help=CONFIG_HELP)
+    run.add_argument("--out", type=Path, default=Path("results/run"),
+                     help="output folder (default results/run)")
+    run.add_argument("--resume", action="store_true",
+                     help="continue an interrupted run from its checkpoint")
+    run.add_argument("--quiet", action="store_true", help="no progress bars or log echo")
+    run.set_defaults(func=run_command)
+
+    simulate = subparsers.add_parser(
+        "simulate", help="forward only: spectra and camera images of the ground truth",
+        description="Compute the FTIR spectra of every pixel for the configured ground truth "
+        "and write them (spectra.npz: radiance [W/(m2 sr cm-1)] per ray and output "
+        "wavenumber) with a figure of one spectrum and the band-integrated camera images.")
+    simulate.add_argument("config", type=Path, help=CONFIG_HELP)
+    simulate.add_argument("--out", type=Path, default=Path("results/simulate"),
+                          help="output folder (default results/simulate)")
+    simulate.set_defaults(func=simulate_command)
+
+    plot = subparsers.add_parser(
+        "plot", help="figures of a finished run or comparison folder",
+        description="Redraw the figures of a folder written by 'invflame run' (cutaways, loss "
+        "curve, spectrum and image) or 'invflame reproduce' (all methods).")
+    plot.add_argument("folder", type=Path, help="a run or reproduce output folder")
+    plot.set_defaults(func=plot_command)
+
+
+def run_command(args: argparse.Namespace) -> int:
+    """``invflame run``."""
+    from invflame.experiments.figures import comparison_figures
+    from invflame.experiments.runner import run_experiment
+
+    summary = run_experiment(configuration.load(args.config), args.out, resume=args.resume,
+                             progress=not args.quiet)
+    comparison_figures(args.out, {"reconstruction": args.out})
+    print(f"normalized MSE: {summary['mse']}; results in {args.out}")
+    return 0
+
+
+def simulate_command(args: argparse.Namespace) -> int:
+    """``invflame simulate``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from invflame.experiments.outputs import write_npz
+    from invflame.experiments.runner import build_scene, load_truth
+
+    cfg = configuration.load(args.config)
+    scene = build_scene(cfg)
+    truth = load_truth(cfg, scene.grid)
+    spectra = scene.simulate(truth.values)
+    write_npz(args.out / "spectra.npz", radiance=spectra, out_wavenumber=scene.out_wavenumber)
+    images = scene.to_images(spectra.sum(axis=1) * (scene.out_wavenumber[1]
+                                                    - scene.out_wavenumber[0]))
+    fig, axes = plt.subplots(1, len(images) + 1, figsize=(4 * (len(images) + 1), 3.6))
+    brightest = int(np.argmax(spectra.sum(axis=1)))
+    axes[0].plot(scene.out_wavenumber, spectra[brightest], "k.-")
+    axes[0].set(xlabel="wavenumber [cm⁻¹]", ylabel="radiance [W/(m²·sr·cm⁻¹)]",
+                title=f"brightest pixel (ray {brightest})")
+    for i, (ax, image) in enumerate(zip(axes[1:], images, strict=True)):
+        shown = ax.imshow(image, cmap="inferno", vmin=0, vmax=images.max())
+        ax.set(title=f"camera {i + 1}", xticks=[], yticks=[])
+    fig.colorbar(shown, ax=axes[1:], label="band radiance [W/(m²·sr)]")
+    fig.savefig(args.out / "simulated.png", dpi=130, bbox_inches="tight")
+    plt.close(fig)
+    print(f"{spectra.shape[0]} spectra of {spectra.shape[1]} points; wrote "
+          f"{args.out / 'spectra.npz'} and {args.out / 'simulated.png'}")
+    return 0
+
+
+def plot_command(args: argparse.Namespace) -> int:
+    """``invflame plot``."""
+    from invflame.experiments.figures import comparison_figures
+    from invflame.experiments.reproduce import METHODS, folder_name
+
+    folder = args.folder
+    if (folder / "summary.json").is_file():
+        runs = {"reconstruction": folder}
+    else:
+        runs = {m: folder / folder_name(m) for m in METHODS
+                if (folder / folder_name(m) / "summary.json").is_file()}
+    if not runs:
+        raise SystemExit(f"{folder} holds no finished run (summary.json) nor comparison")
+    for path in comparison_figures(folder, runs):
+        print(f"wrote {path}")
+    return 0

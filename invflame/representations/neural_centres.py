@@ -1,0 +1,123 @@
+r"""A cheap neural reparameterization: the network evaluated at voxel centres.
+
+The unknowns are the weights :math:`\theta` of one
+:class:`~invflame.representations.neural_field.FieldNetwork`; the fields are the network at
+the voxel centres :math:`c_v`, and the data come from the scene's voxel forward map :math:`H`:
+
+.. math:: F(\theta) = H\big(N_\theta(c)\big), \qquad
+          \Phi(\theta) = g\big(D\, u_\theta(c)\big), \quad u_\theta = N_\theta / s,
+
+with :math:`D` the forward-difference gradient (1/m) and :math:`g` the squared L2 (Tikhonov)
+or L1 (TV) norm scaled as in :func:`operators.tikhonov` / :func:`operators.total_variation`,
+so λ means what it means for voxels. Both maps are compositions of operators, the network part
+a :class:`operators.TorchOperator`: every solver of the registry applies, Gauss–Newton and
+PDHG included (their Jacobians are the voxel Jacobians times the small network Jacobian).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+
+import solvers
+from invflame.representations.neural import TORCH_DTYPES
+from invflame.representations.neural_field import FieldNetwork, centre_points, pretrain
+from invflame.representations.voxel import regularizer_for
+from operators import Operator, TorchOperator
+
+
+class NeuralCentresRepresentation:
+    """Network weights as unknowns, the network sampled at the voxel centres.
+
+    Parameters
+    ----------
+    scene : invflame.scene.Scene
+        Grid (the network's box and the centres), voxel forward map
+        (:attr:`~invflame.scene.Scene.operator`) and dtype.
+    n_frequencies, hidden, depth : int, optional
+        Network shape, see :class:`FieldNetwork` (defaults 10, 64, 4).
+    seed : int, optional
+        Seed of the weight initialization.
+    forward : operators.Operator, optional
+        Voxel forward map from physical fields ``(4, nx, ny, nz)`` to data (default the
+        scene's).
+    """
+
+    kind = "neural-centres"
+
+    def __init__(self, scene, n_frequencies: int = 10, hidden: int = 64, depth: int = 4,
+                 seed: int = 0, forward: Operator | None = None):
+        self.scene = scene
+        self.grid = scene.grid
+        self.dtype = np.dtype(scene.dtype)
+        self.network = FieldNetwork(scene.grid, n_frequencies, hidden, depth,
+                                    tuple(scene.table.temperatures[[0, -1]]), seed=seed,
+                                    dtype=TORCH_DTYPES[self.dtype])
+        self.n_parameters = self.network.n_parameters
+        self.centres = centre_points(scene.grid, TORCH_DTYPES[self.dtype])
+        shape = (4, *self.grid.shape)
+        self.at_centres = self._network_operator(shape, normalized=False)
+        self.normalized_at_centres = self._network_operator(shape, normalized=True)
+        self.forward = (scene.operator if forward is None else forward) @ self.at_centres
+
+    def _network_operator(self, shape, normalized: bool) -> TorchOperator:
+        def fields(theta: torch.Tensor) -> torch.Tensor:
+            return self.network.evaluate(theta, self.centres, normalized=normalized)
+
+        name = "NormalizedNetworkAtCentres" if normalized else "NetworkAtCentres"
+        return TorchOperator(fields, (self.n_parameters,), shape, dtype=self.dtype, name=name)
+
+    def initial_parameters(self, fields=None, iterations: int = 1000, lr: float = 1e-3,
+                           seed: int = 0, progress: bool = True) -> np.ndarray:
+        """Starting weights: the network pretrained on ``fields`` (or as initialized).
+
+        Parameters
+        ----------
+        fields : Field or ndarray, shape (4, nx, ny, nz), optional
+            Voxel fields (T in K, mole fractions), e.g. the noisy initial field of the voxel
+            run; None keeps the current weights.
+        iterations, lr, seed, progress
+            Passed to :func:`~invflame.representations.neural_field.pretrain`.
+        """
+        if fields is not None:
+            pretrain(self.network, fields, iterations, lr, seed, progress=progress)
+        return self.network.parameter_vector().astype(self.dtype)
+
+    def regularizer(self, kind: str) -> solvers.Regularizer | None:
+        """:math:`\\Phi = g \\circ (D \\circ u_\\theta(c))` for ``kind`` in {"none", "tikhonov",
+        "tv"} (None for "none"): the voxel regularizer after the normalized network."""
+        composite = regularizer_for(kind, self.grid)
+        if composite is None:
+            return None
+        return solvers.Regularizer(composite.functional,
+                                   composite.op @ self.normalized_at_centres)
+
+    def problem(self, data, regularizer: str = "none", lam: float = 1e-3,
+                x0=None) -> solvers.Problem:
+        """The inverse problem on network weights (kind ``"neural-centres"``).
+
+        Parameters
+        ----------
+        data : ndarray, shape (n_rays, n_out)
+            Measured spectra in W/(m²·sr·cm⁻¹).
+        regularizer : {"none", "tikhonov", "tv"}
+            See :meth:`regularizer`.
+        lam : float
+            Weight λ (default 1e-3).
+        x0 : ndarray, optional
+            Starting weights, e.g. from :meth:`initial_parameters`.
+        """
+        return solvers.Problem(
+            self.forward, data, regularizer=self.regularizer(regularizer), lam=lam, x0=x0,
+            kind=self.kind, name=f"neural-centres/{regularizer}",
+            metadata={"representation": self.kind, "regularizer": regularizer, "lambda": lam},
+        )
+
+    def fields(self, theta) -> np.ndarray:
+        """Physical fields ``(4, nx, ny, nz)`` (T in K, mole fractions) at the voxel centres."""
+        return self.at_centres(theta)
+
+    @staticmethod
+    def parameter_bytes(theta) -> int:
+        """Memory of the parameters (the network's weights) in bytes."""
+        return int(np.asarray(theta).nbytes)

@@ -1,0 +1,260 @@
+r"""The neural field: temperature and mole fractions as an MLP of encoded position.
+
+Following the NeRF-like representation of Tricard, Chen & Deng (2026),
+
+.. math::
+
+    [T, X_\mathrm{CO_2}, X_\mathrm{H_2O}, X_\mathrm{CH_4}](x) = f_\theta(\gamma(p)),
+    \qquad p = 2\,\frac{x - x_\mathrm{lower}}{x_\mathrm{upper} - x_\mathrm{lower}} - 1
+    \in [-1, 1]^3,
+
+    \gamma(p) = \big(p,\ \sin(2^k \pi p),\ \cos(2^k \pi p)\big)_{k = 0}^{L-1},
+
+with :math:`L = 10` frequencies (a 63-dimensional encoding), 4 hidden layers of 64 units with
+ReLU, and output activations that keep the fields in range: :math:`T = T_\min + (T_\max -
+T_\min)\,\mathrm{sigmoid}(z_0)` (the absorption table's range, 250–2500 K by default) and
+:math:`X_s = \mathrm{sigmoid}(z_s)`. The last layer's biases start at the values giving
+:math:`T = 300` K and :math:`X_s = 0.02`, so an untrained network is close to ambient air.
+
+The network can be evaluated with its own parameters (``network(points)``) or with any flat
+parameter vector (:meth:`FieldNetwork.evaluate`, through :func:`torch.func.functional_call`),
+which is how the representations differentiate with respect to the weights.
+:func:`pretrain` fits a network to a voxel field (the paper's initialization).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+from tqdm.auto import tqdm
+
+from invflame.geometry import VoxelGrid
+from invflame.representations.normalization import SCALES
+
+AMBIENT_START = (300.0, 0.02, 0.02, 0.02)
+"""Fields (T in K, mole fractions) of an untrained network: the last layer's bias values."""
+
+
+def _logit(p: float) -> float:
+    return float(np.log(p / (1.0 - p)))
+
+
+class FieldNetwork(torch.nn.Module):
+    """MLP from position (m) to physical fields ``(T [K], X_CO2, X_H2O, X_CH4)``.
+
+    Parameters
+    ----------
+    grid : VoxelGrid
+        Its box (m) maps to :math:`[-1, 1]^3` before the encoding.
+    n_frequencies : int, optional
+        Frequencies :math:`L` of the sinusoidal encoding (default 10).
+    hidden : int, optional
+        Units per hidden layer (default 64).
+    depth : int, optional
+        Number of hidden layers (default 4).
+    temperature_range : tuple of float, optional
+        :math:`(T_\\min, T_\\max)` in K of the output (default 250–2500 K).
+    seed : int, optional
+        Seed of the weight initialization (default 0).
+    dtype : torch.dtype, optional
+        float32 (default) or float64.
+    """
+
+    n_fields = 4
+
+    def __init__(self, grid: VoxelGrid, n_frequencies: int = 10, hidden: int = 64,
+                 depth: int = 4, temperature_range=(250.0, 2500.0), seed: int = 0,
+                 dtype=torch.float32):
+        super().__init__()
+        t_min, t_max = (float(t) for t in temperature_range)
+        if not 0 < t_min < AMBIENT_START[0] < t_max:
+            raise ValueError(f"temperature_range must satisfy 0 < T_min < {AMBIENT_START[0]} K"
+                             f" < T_max; got {temperature_range}")
+        if n_frequencies < 0 or hidden < 1 or depth < 1:
+            raise ValueError(f"need n_frequencies >= 0, hidden >= 1, depth >= 1; got "
+                             f"{n_frequencies}, {hidden}, {depth}")
+        self.grid = grid
+        self.n_frequencies = int(n_frequencies)
+        self.temperature_range = (t_min, t_max)
+        widths = [3 * (1 + 2 * self.n_frequencies)] + [int(hidden)] * int(depth)
+        generator = torch.Generator().manual_seed(int(seed))
+        layers = []
+        for n_in, n_out in zip(widths[:-1], widths[1:], strict=True):
+            layers += [_linear(n_in, n_out, generator, dtype), torch.nn.ReLU()]
+        last = _linear(widths[-1], self.n_fields, generator, dtype)
+        with torch.no_grad():
+            last.weight.mul_(0.1)
+            start = [(AMBIENT_START[0] - t_min) / (t_max - t_min), *AMBIENT_START[1:]]
+            last.bias.copy_(torch.tensor([_logit(p) for p in start], dtype=dtype))
+        self.mlp = torch.nn.Sequential(*layers, last)
+        self.register_buffer("lower", torch.tensor(grid.lower, dtype=dtype))
+        self.register_buffer("extent", torch.tensor(grid.extent, dtype=dtype))
+        self.register_buffer("frequencies", torch.pi * 2.0 ** torch.arange(
+            self.n_frequencies, dtype=dtype))
+        self.register_buffer("scales", torch.as_tensor(SCALES, dtype=dtype))
+
+    # -- the map ------------------------------------------------------------------------------
+    def encode(self, points: torch.Tensor) -> torch.Tensor:
+        """:math:`\\gamma(p)` of points ``(..., 3)`` in m: shape ``(..., 3 (1 + 2 L))``."""
+        p = 2.0 * (points - self.lower) / self.extent - 1.0
+        angles = (p[..., None, :] * self.frequencies[:, None]).flatten(-2)
+        return torch.cat([p, torch.sin(angles), torch.cos(angles)], dim=-1)
+
+    def forward(self, points: torch.Tensor) -> torch.Tensor:
+        """Physical fields at points ``(..., 3)`` in m: shape ``(4, ...)``, T in K."""
+        z = self.mlp(self.encode(points))
+        t_min, t_max = self.temperature_range
+        temperature = t_min + (t_max - t_min) * torch.sigmoid(z[..., :1])
+        out = torch.cat([temperature, torch.sigmoid(z[..., 1:])], dim=-1)
+        return torch.movedim(out, -1, 0)
+
+    def normalized(self, points: torch.Tensor) -> torch.Tensor:
+        """Normalized fields :math:`u = f / s` at points ``(..., 3)``: shape ``(4, ...)``."""
+        out = self(points)
+        return out / self.scales.reshape((4,) + (1,) * (out.ndim - 1))
+
+    # -- flat parameter vectors ---------------------------------------------------------------
+    @property
+    def n_parameters(self) -> int:
+        """Number of trainable weights."""
+        return sum(p.numel() for p in self.parameters())
+
+    def parameter_vector(self) -> np.ndarray:
+        """The current weights as a flat NumPy vector (in ``named_parameters`` order)."""
+        return torch.nn.utils.parameters_to_vector(self.parameters()).detach().cpu().numpy()
+
+    def load_vector(self, theta) -> None:
+        """Copy a flat weight vector (shape ``(n_parameters,)``) into the module."""
+        theta = self._check(torch.as_tensor(np.asarray(theta)))
+        with torch.no_grad():
+            torch.nn.utils.vector_to_parameters(theta.to(self.lower.dtype), self.parameters())
+
+    def unflatten(self, theta: torch.Tensor) -> dict[str, torch.Tensor]:
+        """Views of a flat weight tensor, by parameter name (for ``functional_call``)."""
+        theta = self._check(theta)
+        out, offset = {}, 0
+        for name, p in self.named_parameters():
+            out[name] = theta[offset:offset + p.numel()].view_as(p)
+            offset += p.numel()
+        return out
+
+    def evaluate(self, theta: torch.Tensor, points: torch.Tensor,
+                 normalized: bool = False) -> torch.Tensor:
+        """Fields at ``points`` (m) with the weights ``theta`` (differentiable in both).
+
+        Parameters
+        ----------
+        theta : torch.Tensor, shape (n_parameters,)
+            Flat weights.
+        points : torch.Tensor, shape (..., 3)
+            Positions in m.
+        normalized : bool, optional
+            Return normalized fields :math:`u = f/s` instead of physical ones.
+
+        Returns
+        -------
+        torch.Tensor, shape (4, ...)
+        """
+        out = torch.func.functional_call(self, self.unflatten(theta), (points,))
+        if normalized:
+            out = out / self.scales.reshape((4,) + (1,) * (out.ndim - 1))
+        return out
+
+    def spatial_gradient(self, theta: torch.Tensor, points: torch.Tensor) -> torch.Tensor:
+        """:math:`\\partial u / \\partial x_d` of the normalized fields, in 1/m.
+
+        Forward-mode derivatives along each axis (three JVPs), differentiable in ``theta``.
+
+        Parameters
+        ----------
+        theta : torch.Tensor, shape (n_parameters,)
+        points : torch.Tensor, shape (..., 3)
+            Positions in m.
+
+        Returns
+        -------
+        torch.Tensor, shape (3, 4, ...)
+            Axis d, then field.
+        """
+        def u(p):
+            return self.evaluate(theta, p, normalized=True)
+
+        eye = torch.eye(3, dtype=points.dtype, device=points.device)
+        return torch.stack([
+            torch.func.jvp(u, (points,), (eye[d].expand_as(points),))[1] for d in range(3)
+        ])
+
+    def _check(self, theta: torch.Tensor) -> torch.Tensor:
+        if theta.shape != (self.n_parameters,):
+            raise ValueError(f"weight vector must have shape ({self.n_parameters},) for this "
+                             f"network; got {tuple(theta.shape)}")
+        return theta
+
+
+def _linear(n_in: int, n_out: int, generator: torch.Generator, dtype) -> torch.nn.Linear:
+    """A linear layer with PyTorch's default (Kaiming-uniform) initialization, seeded."""
+    layer = torch.nn.Linear(n_in, n_out, dtype=dtype)
+    bound = 1.0 / np.sqrt(n_in)
+    with torch.no_grad():
+        layer.weight.uniform_(-bound, bound, generator=generator)
+        layer.bias.uniform_(-bound, bound, generator=generator)
+    return layer
+
+
+def centre_points(grid: VoxelGrid, dtype=torch.float32) -> torch.Tensor:
+    """Voxel centres of ``grid`` in m as a tensor ``(nx, ny, nz, 3)``."""
+    return torch.as_tensor(grid.centres(), dtype=dtype)
+
+
+def pretrain(network: FieldNetwork, target, iterations: int = 2000, lr: float = 1e-3,
+             seed: int = 0, batch_size: int = 8192, progress: bool = True) -> np.ndarray:
+    """Fit a network to a voxel field at the voxel centres (the paper's initialization).
+
+    Minimizes the mean squared error of the normalized fields over random batches of voxel
+    centres with Adam, updating ``network`` in place.
+
+    Parameters
+    ----------
+    network : FieldNetwork
+        Network to fit; its grid defines the voxel centres.
+    target : Field or ndarray, shape (4, nx, ny, nz)
+        Fields on ``network.grid`` (T in K, mole fractions), e.g. the noisy initial field of
+        the voxel run.
+    iterations : int, optional
+        Adam steps (default 2000).
+    lr : float, optional
+        Adam learning rate (default 1e-3).
+    seed : int, optional
+        Seed of the batch sampling.
+    batch_size : int, optional
+        Voxel centres per step (all of them when the grid is smaller).
+    progress : bool, optional
+        Show a tqdm progress bar.
+
+    Returns
+    -------
+    ndarray, shape (iterations,)
+        The batch loss (mean squared error of normalized fields) of every step.
+    """
+    values = np.asarray(getattr(target, "values", target))
+    expected = (4, *network.grid.shape)
+    if values.shape != expected:
+        raise ValueError(f"target must have shape {expected} (fields on the network's grid); "
+                         f"got {values.shape}")
+    if iterations < 1 or not lr > 0:
+        raise ValueError(f"need iterations >= 1 and lr > 0; got {iterations}, {lr}")
+    dtype = network.lower.dtype
+    points = centre_points(network.grid, dtype).reshape(-1, 3)
+    u_target = torch.as_tensor(values.reshape(4, -1) / SCALES[:, None], dtype=dtype)
+    generator = torch.Generator().manual_seed(int(seed))
+    batch = min(int(batch_size), points.shape[0])
+    optimizer = torch.optim.Adam(network.parameters(), lr=lr)
+    losses = np.empty(int(iterations))
+    for k in tqdm(range(int(iterations)), disable=not progress, desc="pretrain neural field"):
+        index = torch.randperm(points.shape[0], generator=generator)[:batch]
+        optimizer.zero_grad()
+        loss = torch.mean((network.normalized(points[index]) - u_target[:, index]) ** 2)
+        loss.backward()
+        optimizer.step()
+        losses[k] = loss.item()
+    return losses

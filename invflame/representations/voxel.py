@@ -1,0 +1,109 @@
+"""The voxel parameterization: normalized field values on the reconstruction grid."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import operators as op
+import solvers
+from invflame.geometry import VoxelGrid
+from invflame.representations.normalization import (
+    SCALES,
+    denormalize,
+    normalize,
+    physical_bounds,
+)
+
+REGULARIZERS = ("none", "tikhonov", "tv")
+
+
+def regularizer_for(kind: str, grid: VoxelGrid, n_fields: int = 4):
+    """The voxel regularizer Φ on normalized fields, as an ``operators.Composite`` or None.
+
+    Parameters
+    ----------
+    kind : {"none", "tikhonov", "tv"}
+        No regularizer, :math:`\\sum_d \\mathrm{mean}((D_d u)^2)` or
+        :math:`\\sum_d \\mathrm{mean}(|D_d u|)` with forward differences per metre.
+    grid : VoxelGrid
+        Gives the shape and spacing (m).
+    n_fields : int, optional
+        Number of fields (default 4).
+    """
+    if kind not in REGULARIZERS:
+        raise ValueError(f"unknown regularizer {kind!r}; choose one of {', '.join(REGULARIZERS)}")
+    if kind == "none":
+        return None
+    dims = (n_fields, *grid.shape)
+    make = op.tikhonov if kind == "tikhonov" else op.total_variation
+    return make(dims, tuple(grid.spacing))
+
+
+class VoxelRepresentation:
+    """Normalized fields per voxel as the unknowns: :math:`\\theta = u = f / s` (see
+    :mod:`invflame.representations.normalization`).
+
+    Parameters
+    ----------
+    grid : VoxelGrid
+        Reconstruction grid.
+    forward : operators.Operator
+        Voxel forward map from physical fields ``(4, nx, ny, nz)`` (T in K, mole fractions) to
+        data, e.g. the scene's ``ILSConvolution @ EmissionRTE @ VoxelSampling``.
+    temperature_range : tuple of float, optional
+        Physical bounds on T in K (default 250–2500 K, the absorption table's range).
+    """
+
+    kind = "voxel"
+
+    def __init__(self, grid: VoxelGrid, forward: op.Operator,
+                 temperature_range=(250.0, 2500.0)):
+        dims = (4, *grid.shape)
+        if tuple(forward.dims) != dims:
+            raise ValueError(f"forward map takes {forward.dims}, expected {dims} for a "
+                             f"{grid.shape} grid")
+        self.grid = grid
+        self.dims = dims
+        scales = np.broadcast_to(SCALES.reshape(4, 1, 1, 1), dims)
+        self.forward = forward @ op.Diagonal(scales, dtype=forward.dtype, name="denormalize")
+        lower, upper = physical_bounds(*temperature_range)
+        self.lower = np.broadcast_to(normalize(lower.reshape(4, 1, 1, 1)), dims)
+        self.upper = np.broadcast_to(normalize(upper.reshape(4, 1, 1, 1)), dims)
+
+    def initial_parameters(self, fields) -> np.ndarray:
+        """Parameters for physical fields ``(4, nx, ny, nz)``, clipped to the bounds."""
+        fields = np.asarray(fields)
+        if fields.shape != self.dims:
+            raise ValueError(f"fields must have shape {self.dims}, got {fields.shape}")
+        return np.clip(normalize(fields), self.lower, self.upper).astype(self.forward.dtype)
+
+    def problem(self, data, regularizer: str = "none", lam: float = 1e-3,
+                x0=None) -> solvers.Problem:
+        """The inverse problem on voxel values.
+
+        Parameters
+        ----------
+        data : ndarray
+            Measured spectra, shape ``forward.dimsd``, W/(m²·sr·cm⁻¹).
+        regularizer : {"none", "tikhonov", "tv"}
+            See :func:`regularizer_for`.
+        lam : float
+            Weight λ (default 1e-3, the paper's).
+        x0 : ndarray, optional
+            Starting parameters (normalized), e.g. from :meth:`initial_parameters`.
+        """
+        return solvers.Problem(
+            self.forward, data, regularizer=regularizer_for(regularizer, self.grid), lam=lam,
+            lower=self.lower, upper=self.upper, x0=x0, kind="voxel",
+            name=f"voxel/{regularizer}",
+            metadata={"representation": "voxel", "regularizer": regularizer, "lambda": lam},
+        )
+
+    def fields(self, theta) -> np.ndarray:
+        """Physical fields ``(4, nx, ny, nz)`` (T in K, mole fractions) at voxel centres."""
+        return denormalize(np.asarray(theta).reshape(self.dims))
+
+    @staticmethod
+    def parameter_bytes(theta) -> int:
+        """Memory of the parameters in bytes."""
+        return int(np.asarray(theta).nbytes)

@@ -1,0 +1,100 @@
+"""The field network: shapes, ranges, flat weights, spatial derivatives, pretraining."""
+
+import numpy as np
+import pytest
+import torch
+
+from invflame.geometry import VoxelGrid
+from invflame.representations.neural_field import (
+    AMBIENT_START,
+    FieldNetwork,
+    centre_points,
+    pretrain,
+)
+from invflame.representations.normalization import SCALES
+
+GRID = VoxelGrid.poolfire(8)
+
+
+def test_outputs_have_field_shape_and_stay_in_range_for_any_weights():
+    network = FieldNetwork(GRID, temperature_range=(250.0, 2500.0), seed=3)
+    assert network.encode(torch.zeros(5, 3)).shape == (5, 63)
+    points = torch.tensor(np.random.default_rng(0).uniform(-2.0, 3.0, (7, 11, 3)),
+                          dtype=torch.float32)
+    wild = 30.0 * torch.randn(network.n_parameters, generator=torch.Generator().manual_seed(1))
+    out = network.evaluate(wild, points)
+    assert out.shape == (4, 7, 11)
+    assert torch.all((out[0] >= 250.0) & (out[0] <= 2500.0))
+    assert torch.all((out[1:] >= 0.0) & (out[1:] <= 1.0))
+    assert out[0].max() - out[0].min() > 100.0  # the range is used, not a constant
+
+
+def test_untrained_network_starts_near_ambient():
+    out = FieldNetwork(GRID)(centre_points(GRID)).detach().numpy()
+    np.testing.assert_allclose(out.reshape(4, -1).mean(axis=1), AMBIENT_START, rtol=0.05)
+
+
+def test_flat_weights_round_trip_and_drive_the_evaluation():
+    a, b = FieldNetwork(GRID, seed=0), FieldNetwork(GRID, seed=1)
+    points = centre_points(GRID)
+    theta_b = torch.tensor(b.parameter_vector())
+    assert a.n_parameters == 63 * 64 + 64 + 3 * (64 * 64 + 64) + 64 * 4 + 4
+    assert not torch.allclose(a(points), b(points))
+    torch.testing.assert_close(a.evaluate(theta_b, points), b(points))
+    a.load_vector(theta_b.numpy())
+    torch.testing.assert_close(a(points), b(points))
+    torch.testing.assert_close(a.evaluate(theta_b, points, normalized=True),
+                               b(points) / torch.tensor(SCALES, dtype=torch.float32)[:, None,
+                                                                                    None, None])
+    with pytest.raises(ValueError, match="weight vector must have shape"):
+        a.evaluate(theta_b[:-1], points)
+
+
+def test_spatial_gradient_matches_reverse_mode_derivative():
+    network = FieldNetwork(GRID, seed=2, dtype=torch.float64)
+    theta = torch.tensor(network.parameter_vector())
+    points = torch.tensor(np.random.default_rng(4).uniform(0.0, 1.0, (5, 3)) - [0.5, 0, 0.5])
+    grads = network.spatial_gradient(theta, points)  # (3, 4, 5)
+    assert grads.shape == (3, 4, 5)
+    for i in range(5):
+        jac = torch.autograd.functional.jacobian(
+            lambda p: network.normalized(p[None])[:, 0], points[i])  # (4, 3)
+        torch.testing.assert_close(grads[:, :, i], jac.T, rtol=1e-10, atol=1e-12)
+
+
+def test_spatial_gradient_is_differentiable_in_the_weights():
+    network = FieldNetwork(GRID, seed=2, dtype=torch.float64)
+    theta = torch.tensor(network.parameter_vector(), requires_grad=True)
+    points = centre_points(GRID, torch.float64)[:2, :2, :2].reshape(-1, 3)
+    direction = torch.randn(theta.shape, dtype=torch.float64,
+                            generator=torch.Generator().manual_seed(0))
+
+    def value(t):
+        return torch.sum(network.spatial_gradient(t, points) ** 2)
+
+    value(theta).backward()
+    h = 1e-6
+    with torch.no_grad():
+        numeric = (value(theta + h * direction) - value(theta - h * direction)) / (2 * h)
+    assert torch.dot(theta.grad, direction).item() == pytest.approx(numeric.item(), rel=1e-5)
+
+
+def test_pretraining_fits_the_target_field(plume):
+    network = FieldNetwork(GRID, seed=0)
+    target = plume / SCALES[:, None, None, None]
+
+    def error():
+        with torch.no_grad():
+            fit = network.normalized(centre_points(GRID)).numpy()
+        return np.mean((fit - target) ** 2)
+
+    before = error()
+    losses = pretrain(network, plume, iterations=150, lr=3e-3, seed=0, progress=False)
+    assert losses.shape == (150,)
+    assert error() < 0.1 * before
+    assert losses[-10:].mean() < 0.1 * losses[:10].mean()
+
+
+def test_pretraining_rejects_a_field_on_another_grid(plume):
+    with pytest.raises(ValueError, match="target must have shape"):
+        pretrain(FieldNetwork(VoxelGrid.poolfire(4)), plume, iterations=1, progress=False)
