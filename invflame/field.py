@@ -13,12 +13,11 @@ every species, and of gas in total, as the fine cells it covers.
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from invflame.atomic_files import write_npz
 from invflame.geometry import VoxelGrid
 
 FIELD_NAMES = ("T", "CO2", "H2O", "CH4")
@@ -155,30 +154,17 @@ class Field:
         pathlib.Path
             The path written.
         """
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-        try:
-            with os.fdopen(fd, "wb") as fh:
-                np.savez_compressed(
-                    fh,
-                    values=self.values,
-                    names=np.array(FIELD_NAMES),
-                    lower=self.grid.lower,
-                    upper=self.grid.upper,
-                    spacing=self.grid.spacing,
-                    shape=np.array(self.grid.shape),
-                    up_axis=np.array(self.grid.up_axis),
-                    metadata=np.array(json.dumps(self.metadata)),
-                )
-            umask = os.umask(0)
-            os.umask(umask)
-            os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates the file private (0600)
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
-        return path
+        return write_npz(
+            path,
+            values=self.values,
+            names=np.array(FIELD_NAMES),
+            lower=self.grid.lower,
+            upper=self.grid.upper,
+            spacing=self.grid.spacing,
+            shape=np.array(self.grid.shape),
+            up_axis=np.array(self.grid.up_axis),
+            metadata=np.array(json.dumps(self.metadata)),
+        )
 
     @classmethod
     def load(cls, path) -> Field:

@@ -65,7 +65,7 @@ def simulate_command(args: argparse.Namespace) -> int:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from invflame.experiments.outputs import write_npz
+    from invflame.atomic_files import write_npz
     from invflame.experiments.runner import build_scene, load_truth
 
     cfg = configuration.load(args.config)

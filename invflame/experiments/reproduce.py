@@ -23,8 +23,8 @@ import copy
 import time
 from pathlib import Path
 
+from invflame.atomic_files import read_json, write_csv, write_json, write_text
 from invflame.experiments import config as configuration
-from invflame.experiments.outputs import read_json, write_csv, write_json, write_text
 
 PAPER_TABLE = {
     # method: epoch [ms], memory [MB], MSE_T, MSE_CO2, MSE_H2O (2000 epochs, GPU)

@@ -31,10 +31,10 @@ import numpy as np
 
 import operators as op
 import solvers
+from invflame.atomic_files import read_json, write_csv, write_json, write_npz, write_text
 from invflame.experiments import config as configuration
 from invflame.experiments.initialization import add_noise, ambient, noisy_truth
 from invflame.experiments.metrics import normalized_mse, peak_memory_mb, psnr
-from invflame.experiments.outputs import read_json, write_csv, write_json, write_npz, write_text
 from invflame.field import Field
 from invflame.geometry import VoxelGrid, paper_rig
 from invflame.phantoms import make_phantom
@@ -67,7 +67,7 @@ def absorption_table(cfg: dict) -> AbsorptionTable:
     spectrum = cfg["spectrum"]
     n = int(round((spectrum["max"] - spectrum["min"]) / spectrum["step"])) + 1
     wavenumber = spectrum["min"] + spectrum["step"] * np.arange(n)
-    return AbsorptionTable.cached(default_linelists(), wavenumber=wavenumber,
+    return AbsorptionTable.cached(default_linelists(wavenumber), wavenumber=wavenumber,
                                   pressure=spectrum["pressure"])
 
 

@@ -1,7 +1,8 @@
 """Parameterizations of the flame fields that solvers optimize.
 
 ``voxel``           normalized field values per voxel (:class:`VoxelRepresentation`)
-``neural``          a NeRF-like neural field rendered along rays (:class:`NeuralFieldRepresentation`)
+``neural``          a NeRF-like neural field rendered along rays
+                    (:class:`NeuralFieldRepresentation`)
 ``neural-centres``  a network evaluated at voxel centres, then the voxel forward map
                     (:class:`NeuralCentresRepresentation`)
 

@@ -14,12 +14,12 @@ uncertainty codes 128–133, references 134–145, line-mixing flag 146, g' 147�
 from __future__ import annotations
 
 import itertools
-import os
-import tempfile
 from dataclasses import dataclass, fields
 from pathlib import Path
 
 import numpy as np
+
+from invflame.atomic_files import write_atomic
 
 RECORD_LENGTH = 160
 
@@ -325,13 +325,5 @@ def write_par(lines: LineList, path) -> None:
     ValueError
         If a value does not fit its fixed-width field.
     """
-    path = Path(path)
     records = "".join(_format_record(lines, i) + "\n" for i in range(len(lines)))
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="ascii", newline="\n") as stream:
-            stream.write(records)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    write_atomic(path, lambda stream: stream.write(records.encode("ascii")))

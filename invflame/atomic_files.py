@@ -1,4 +1,9 @@
-"""Atomic writing of run outputs: text, JSON, CSV; a half-written file never replaces a good one."""
+"""Atomic file writing: a half-written file never replaces a good one.
+
+Every file invflame writes (fields, absorption tables, line lists, run outputs) goes through
+:func:`write_atomic`: the content fills a temporary file in the destination folder, which is
+flushed to disk and then renamed over the destination.
+"""
 
 from __future__ import annotations
 
@@ -14,7 +19,15 @@ import numpy as np
 
 def write_atomic(path, write) -> Path:
     """Create ``path`` atomically: ``write(binary_stream)`` fills a temporary file in the same
-    folder, which then replaces ``path`` (readable by all, 0644)."""
+    folder, which then replaces ``path`` with the permissions the umask gives new files.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Destination; parent folders are created.
+    write : callable
+        Writes the content to the binary stream it is given.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
@@ -23,7 +36,9 @@ def write_atomic(path, write) -> Path:
             write(handle)
             handle.flush()
             os.fsync(handle.fileno())
-        os.chmod(tmp, 0o644)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates the file private (0600)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
