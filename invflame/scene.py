@@ -12,6 +12,11 @@ fields (T in K, mole fractions of CO2, H2O, CH4) to measured spectra in W/(m²·
 as a composed :class:`operators.Operator` (:attr:`Scene.operator`: jvp, vjp, Jacobian, dot
 and Taylor tests) and as one jitted JAX function (:meth:`Scene.forward`, differentiable with
 ``jax.vjp``/``jax.grad`` through the kernel's custom VJP), which give the same numbers.
+
+With ``devices`` given, :meth:`Scene.forward` splits the rays over several devices
+(:func:`operators.sharding.shard_rays`): the fields stay replicated, each device measures its
+block of rays, and gradients are summed over the devices; the numbers agree with the
+one-device map to round-off. :attr:`Scene.operator` always runs on one device.
 """
 
 from __future__ import annotations
@@ -28,6 +33,7 @@ from operators import ILSConvolution, Operator
 from operators.emission_rte import EmissionRTE, RTETables, batch_rays_for, emission_radiance
 from operators.interop import to_jax, to_numpy
 from operators.sampling import VoxelSampling, sample_voxels
+from operators.sharding import place_rays, ray_mesh, replicate, shard_rays
 
 
 def _window_slice(wavenumber: np.ndarray, window) -> slice:
@@ -43,7 +49,7 @@ def _window_slice(wavenumber: np.ndarray, window) -> slice:
     return slice(int(inside[0]), int(inside[-1]) + 1)
 
 
-def _measure(tables, batch_rays, voxel, lengths, ils, fields):
+def _measure(batch_rays, tables, voxel, lengths, ils, fields):
     radiance = emission_radiance(tables, sample_voxels(fields, voxel), lengths, batch_rays)
     return jnp.matmul(radiance, ils.T, precision=jax.lax.Precision.HIGHEST)
 
@@ -75,6 +81,10 @@ class Scene:
         Bytes for one batch of rays in the emission kernel (default: per JAX backend).
     batch_rays : int, optional
         Rays per batch, overriding ``memory_budget``.
+    devices : int, sequence of jax.Device or jax.sharding.Mesh, optional
+        Split the rays of :meth:`forward` over these devices (see
+        :func:`operators.sharding.ray_mesh`; an int: the first ``n`` devices). Default
+        ``None``: one device, no sharding.
 
     Attributes
     ----------
@@ -84,12 +94,14 @@ class Scene:
         Line-by-line grid in cm⁻¹.
     out_wavenumber : ndarray, shape (n_out,)
         Instrument output grid in cm⁻¹.
+    mesh : jax.sharding.Mesh or None
+        Devices the rays of :meth:`forward` are split over (``None``: not sharded).
     """
 
     def __init__(self, grid: VoxelGrid, rig: CameraRig, table: AbsorptionTable,
                  resolution: float = 8.0, out_wavenumber=None, window=None,
                  dtype=np.float32, planck: str = "table", memory_budget: int | None = None,
-                 batch_rays: int | None = None):
+                 batch_rays: int | None = None, devices=None):
         if not isinstance(grid, VoxelGrid):
             raise TypeError(f"grid must be an invflame.geometry.VoxelGrid, got {type(grid)}")
         if not isinstance(rig, CameraRig):
@@ -107,12 +119,23 @@ class Scene:
         self.out_wavenumber = self.ils.out_wavenumber
         self.tables = RTETables.from_spline(self.wavenumber, table.temperatures, self._coef,
                                             table.pressure, self.dtype, planck)
-        self.batch_rays = int(batch_rays or batch_rays_for(self.tables, self.n_rays,
+        self.mesh = None if devices is None else ray_mesh(devices)
+        rays_per_device = self.n_rays if self.mesh is None else -(-self.n_rays
+                                                                   // self.mesh.devices.size)
+        self.batch_rays = int(batch_rays or batch_rays_for(self.tables, rays_per_device,
                                                            memory_budget))
-        self._arrays = (jnp.asarray(self.segments.voxel),
-                        jnp.asarray(self.segments.length, self.dtype),
-                        jnp.asarray(self.ils.matrix, self.dtype))
-        self._measure = jax.jit(partial(_measure, batch_rays=self.batch_rays))
+        measure = partial(_measure, self.batch_rays)
+        rays = (self.segments.voxel, self.segments.length.astype(self.dtype))
+        ils_matrix = np.asarray(self.ils.matrix, self.dtype)
+        if self.mesh is None:
+            self._arrays = (self.tables, *(jnp.asarray(a) for a in rays),
+                            jnp.asarray(ils_matrix))
+            self._measure = jax.jit(measure)
+        else:  # constants cut and placed once: rays split, tables and instrument replicated
+            self._arrays = (replicate(self.tables, self.mesh), *place_rays(rays, 0, self.mesh),
+                            replicate(ils_matrix, self.mesh))
+            sharded = shard_rays(measure, ray_axes=(None, 0, 0, None, None), devices=self.mesh)
+            self._measure = jax.jit(lambda *args: sharded(*args)[:self.n_rays])
 
     @classmethod
     def paper(cls, n_cells: int = 60, n_pixels: int = 32, table: AbsorptionTable | None = None,
@@ -199,8 +222,7 @@ class Scene:
         fields = to_jax(fields, dtype=self.dtype)
         if fields.shape != self.field_shape:
             raise ValueError(f"fields must have shape {self.field_shape}, got {fields.shape}")
-        return self._measure(self.tables, voxel=self._arrays[0], lengths=self._arrays[1],
-                             ils=self._arrays[2], fields=fields)
+        return self._measure(*self._arrays, fields)
 
     def simulate(self, fields) -> np.ndarray:
         """:meth:`forward` as a NumPy array."""

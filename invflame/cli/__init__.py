@@ -10,9 +10,9 @@ import argparse
 import sys
 
 from invflame import __version__
-from invflame.cli import co2, demo, experiment, lines, phantom, reproduce
+from invflame.cli import co2, demo, experiment, lines, phantom, reproduce, sweep
 
-COMMANDS = [reproduce, experiment, demo, phantom, lines, co2]
+COMMANDS = [reproduce, experiment, sweep, demo, phantom, lines, co2]
 
 
 def build_parser() -> argparse.ArgumentParser:

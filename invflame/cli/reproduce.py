@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 
@@ -28,14 +29,64 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--seed", type=int, default=0,
                         help="seed of the initialization noise (default 0)")
     parser.add_argument("--quiet", action="store_true", help="no progress bars or log echo")
+    add_cluster_arguments(parser, "the methods")
     parser.set_defaults(func=run)
 
 
+def add_cluster_arguments(parser: argparse.ArgumentParser, what: str) -> None:
+    """``--workers``, ``--scheduler`` and ``--retries``: run ``what`` on a Dask cluster."""
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=_positive_int, metavar="N",
+                       help=f"run {what} in parallel on a local Dask cluster of N worker "
+                       "processes (default: one after the other in this process)")
+    where.add_argument("--scheduler", metavar="ADDRESS",
+                       help=f"run {what} on an existing Dask cluster: its scheduler address "
+                       "(tcp://host:8786) or scheduler file (JSON), e.g. one started by "
+                       "dask-jobqueue on Slurm; the output folder must be on a file system "
+                       "the workers share")
+    parser.add_argument("--retries", type=int, default=1, metavar="R",
+                        help="on a cluster, retry a failed run R times, resuming from its "
+                        "checkpoint (default 1)")
+
+
+def _positive_int(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a positive number of workers, got {text}")
+    return value
+
+
 def run(args: argparse.Namespace) -> int:
-    """Run the comparison."""
+    """Run the comparison (on a Dask cluster with ``--workers``/``--scheduler``)."""
     from invflame.experiments.reproduce import reproduce
 
-    reproduce(args.preset, args.out, resume=args.resume, progress=not args.quiet,
-              methods=args.methods, seed=args.seed)
-    print(f"results in {args.out}")
+    if args.workers is None and args.scheduler is None:
+        reproduce(args.preset, args.out, resume=args.resume, progress=not args.quiet,
+                  methods=args.methods, seed=args.seed)
+        print(f"results in {args.out}")
+        return 0
+    return run_on_cluster(args)
+
+
+def run_on_cluster(args: argparse.Namespace) -> int:
+    """The methods as parallel Dask tasks, then the table and figures of those that finished."""
+    from invflame.experiments.cluster import Job, dask_client, failure_report, run_jobs
+    from invflame.experiments.reproduce import METHODS, folder_name, method_config, reproduce
+
+    methods = list(args.methods or METHODS)
+    jobs = [Job(m, method_config(args.preset, m, args.seed), args.out / folder_name(m))
+            for m in methods]
+    with dask_client(args.workers, args.scheduler) as client:
+        outcomes = run_jobs(client, jobs, resume=args.resume, retries=args.retries,
+                            progress=not args.quiet)
+    finished = {folder_name(o.job.name): o.summary for o in outcomes if o.ok}
+    if finished:
+        reproduce(args.preset, args.out, resume=args.resume, progress=not args.quiet,
+                  methods=[o.job.name for o in outcomes if o.ok], seed=args.seed,
+                  run=lambda cfg, folder, resume, progress: finished[Path(folder).name])
+        print(f"results in {args.out}")
+    report = failure_report(outcomes)
+    if report:
+        print(report, end="", file=sys.stderr)
+        return 1
     return 0
