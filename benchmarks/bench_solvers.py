@@ -14,7 +14,6 @@ of its voxel runs (GPU, Adam; Tricard, Chen & Deng 2026, Table 1).
 import argparse
 import time
 
-import operators as op
 import solvers
 from invflame.experiments.initialization import noisy_truth
 from invflame.phantoms import poolfire
@@ -35,9 +34,7 @@ def main():
     scene = Scene.paper(n_cells=args.n_cells, n_pixels=args.n_pixels)
     truth = poolfire(scene.grid)
     data = scene.simulate(truth.values)
-    forward = op.Operator.from_jax(scene.forward, scene.field_shape, scene.data_shape,
-                                   dtype=scene.dtype, name="scene")
-    rep = VoxelRepresentation(scene.grid, forward)
+    rep = VoxelRepresentation(scene.grid, scene.operator)
     x0 = rep.initial_parameters(noisy_truth(truth.values, 0.2, seed=0))
     print(f"voxel problem: grid {scene.grid.shape}, {scene.n_rays} rays, "
           f"{scene.wavenumber.size} -> {scene.out_wavenumber.size} wavenumbers, "

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from tqdm.auto import tqdm
+from tqdm import tqdm
 
 
 class Callback:
@@ -55,7 +55,7 @@ class ProgressBar(Callback):
     desc : str, optional
         Label (default: the solver's name).
     **tqdm_kwargs
-        Passed to :func:`tqdm.auto.tqdm` (e.g. ``disable=True``, ``file=...``).
+        Passed to :func:`tqdm.tqdm` (e.g. ``disable=True``, ``file=...``).
     """
 
     def __init__(self, desc: str | None = None, **tqdm_kwargs):

@@ -182,7 +182,7 @@ def run_jobs(client, jobs: Sequence[Job], resume: bool = False, retries: int = 1
         In the order of ``jobs``; failed runs carry their error, the others their summary.
     """
     from distributed import as_completed
-    from tqdm.auto import tqdm
+    from tqdm import tqdm
 
     folders = [Path(job.folder).resolve() for job in jobs]
     if len(set(folders)) != len(folders):

@@ -57,7 +57,7 @@ PRESETS = {
     "paper": {"truth": {"grid": 60}, "rig": {"pixels": 32}, "spectrum": {"step": 0.04},
               "epochs": 2000},
     "quick": {"truth": {"grid": 30}, "rig": {"pixels": 16}, "spectrum": {"step": 0.08},
-              "epochs": 150},
+              "epochs": 200},
 }
 
 

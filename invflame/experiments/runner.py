@@ -113,11 +113,9 @@ def make_representation(cfg: dict, scene: Scene):
         return NeuralFieldRepresentation(scene, n_coarse=settings["coarse_samples"],
                                          n_fine=settings["fine_samples"],
                                          batch_rays=settings["rays_per_batch"], **network)
-    forward = op.Operator.from_jax(scene.forward, scene.field_shape, scene.data_shape,
-                                   dtype=scene.dtype, name="scene")
     if kind == "neural-centres":
-        return NeuralCentresRepresentation(scene, forward=forward, **network)
-    return VoxelRepresentation(scene.grid, forward, temperature_range=_t_range(scene))
+        return NeuralCentresRepresentation(scene, **network)
+    return VoxelRepresentation(scene.grid, scene.operator, temperature_range=_t_range(scene))
 
 
 def starting_parameters(cfg: dict, representation, start: np.ndarray, progress: bool):
@@ -198,6 +196,7 @@ def run_experiment(cfg: dict, out_dir, resume: bool = False, progress: bool = Tr
     fields = representation.fields(result.x)
     lower, upper = physical_bounds(*_t_range(scene))
     fields = np.clip(fields, lower.reshape(4, 1, 1, 1), upper.reshape(4, 1, 1, 1))
+    fields[1:] /= np.maximum(fields[1:].sum(axis=0), 1.0)  # a network may exceed sum(X) = 1
     Field(scene.grid, fields,
           {"source": "reconstruction", "config": cfg}).save(out / "reconstruction.npz")
     simulated = scene.simulate(fields)

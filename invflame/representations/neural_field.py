@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 import torch
-from tqdm.auto import tqdm
+from tqdm import tqdm
 
 from invflame.geometry import VoxelGrid
 from invflame.representations.normalization import SCALES
@@ -207,7 +207,7 @@ def centre_points(grid: VoxelGrid, dtype=torch.float32) -> torch.Tensor:
 
 
 def pretrain(network: FieldNetwork, target, iterations: int = 2000, lr: float = 1e-3,
-             seed: int = 0, batch_size: int = 8192, progress: bool = True) -> np.ndarray:
+             seed: int = 0, batch_size: int = 2048, progress: bool = True) -> np.ndarray:
     """Fit a network to a voxel field at the voxel centres (the paper's initialization).
 
     Minimizes the mean squared error of the normalized fields over random batches of voxel

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 from scipy import constants
-from tqdm.auto import tqdm
+from tqdm import tqdm
 
 from invflame.atomic_files import write_atomic
 from invflame.spectroscopy.cross_section import WING_CUTOFF, cross_section, default_wavenumber

@@ -66,3 +66,24 @@ def test_reproduce_writes_table_and_figures(tmp_path, monkeypatch):
         assert (tmp_path / name).is_file(), name
     text = (tmp_path / "table.md").read_text()
     assert "| VG/TV |" in text and "qualitative findings" in text
+
+
+@pytest.mark.parametrize(("solver", "regularizer"), [("gauss-newton", "tikhonov"),
+                                                      ("pdhg", "tv")])
+def test_forward_mode_solvers_run_through_the_runner(tmp_path, solver, regularizer):
+    cfg = tiny(solver={"name": solver, "iterations": 2, "options": {"inner_iter": 5}},
+               regularizer={"kind": regularizer})
+    summary = runner.run_experiment(cfg, tmp_path, progress=False)
+    assert summary["loss"]["final"] < summary["loss"]["initial"]
+
+
+@pytest.mark.parametrize("kind", ["neural", "neural-centres"])
+def test_neural_representations_run_through_the_runner(tmp_path, kind):
+    cfg = tiny(representation={"kind": kind, "hidden": 16, "layers": 2, "coarse_samples": 8,
+                               "fine_samples": 8, "rays_per_batch": 32,
+                               "pretrain_iterations": 20},
+               solver={"name": "adam", "iterations": 3, "options": {"lr": 1e-3}})
+    summary = runner.run_experiment(cfg, tmp_path, progress=False)
+    assert np.isfinite(summary["loss"]["final"])
+    assert summary["parameter_memory_mb"] > 0
+    assert Field.load(tmp_path / "reconstruction.npz").values.shape == (4, 8, 8, 8)
