@@ -3,8 +3,9 @@
 Paper configuration: 60³ voxels over the pool-fire box, four cameras of 32×32 pixels, 650–725
 cm⁻¹ at 0.04 cm⁻¹, 8 cm⁻¹ FTIR resolution, float32; the packaged OpenFOAM pool fire as ground
 truth, the paper's initialization (truth + 20 % noise), TV for ``pdhg`` and Tikhonov for the
-others (Gauss–Newton needs a quadratic regularizer), λ = 1e-3 per measurement. Each solver runs
-``--iterations`` iterations after one warm-up iteration (compilation) and prints the mean wall
+others (Gauss–Newton needs a quadratic regularizer), λ = 1e-3 per ray (as in
+:mod:`invflame.experiments.runner`). Each solver runs ``--iterations`` iterations after one
+warm-up iteration (compilation) and prints the mean wall
 time per iteration and the parameter memory, next to the paper's 430–432 ms and 3 MB per epoch
 of its voxel runs (GPU, Adam; Tricard, Chen & Deng 2026, Table 1).
 
@@ -42,7 +43,7 @@ def main():
           "[paper: 3.0 MB]")
     for name in args.solvers:
         regularizer = "tv" if name == "pdhg" else "tikhonov"
-        problem = rep.problem(data, regularizer=regularizer, lam=1e-3 * data.size, x0=x0)
+        problem = rep.problem(data, regularizer=regularizer, lam=1e-3 * scene.n_rays, x0=x0)
         options = OPTIONS.get(name, {})
         warm = solvers.solve(problem, name, max_iter=1, **options)
         start = time.perf_counter()

@@ -60,7 +60,7 @@ def spectrum_and_image(folder, path, n_cameras: int = 4) -> Path:
     vmax = max(image.max(), image_sim.max())
     for ax, img, title in ((axes[1], image, "measured"), (axes[2], image_sim, "simulated")):
         shown = ax.imshow(img, cmap="inferno", vmin=0, vmax=vmax)
-        ax.set(title=f"camera 1, band radiance, {title}", xticks=[], yticks=[])
+        ax.set(title=f"camera 1, {title}", xticks=[], yticks=[])
     fig.colorbar(shown, ax=axes[1:], label="band radiance [W/(m²·sr)]")
     fig.savefig(path, dpi=130, bbox_inches="tight")
     plt.close(fig)

@@ -44,6 +44,25 @@ def psnr(truth: np.ndarray, estimate: np.ndarray) -> dict[str, float]:
             for k, v in normalized_mse(truth, estimate).items()}
 
 
+def hot_volume_ratio(truth: np.ndarray, estimate: np.ndarray, threshold: float = 500.0) -> float:
+    """Volume with T above ``threshold`` (K) in the estimate over that in the truth.
+
+    A reconstruction that lost the flame (e.g. smoothed to ambient air) has a ratio near 0 even
+    when its MSE looks good, because the MSE over a mostly ambient domain rewards a flat field.
+
+    Parameters
+    ----------
+    truth, estimate : ndarray, shape (n_fields, nx, ny, nz)
+        Fields with temperature (K) first.
+    threshold : float, optional
+        Temperature in K (default 500).
+    """
+    hot = np.count_nonzero(np.asarray(truth)[0] > threshold)
+    if hot == 0:
+        raise ValueError(f"the truth has no voxel above {threshold} K")
+    return float(np.count_nonzero(np.asarray(estimate)[0] > threshold) / hot)
+
+
 def peak_memory_mb() -> float:
     """Peak resident memory of this process so far, in MB (10⁶ bytes)."""
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss

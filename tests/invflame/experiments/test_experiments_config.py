@@ -55,3 +55,14 @@ def test_normalized_mse_uses_the_truth_range():
     assert psnr(truth, estimate)["T"] == pytest.approx(20.0)
     with pytest.raises(ValueError, match="differ in shape"):
         normalized_mse(truth, estimate[:3])
+
+
+def test_hot_volume_ratio_flags_a_lost_flame():
+    from invflame.experiments.metrics import hot_volume_ratio
+
+    truth = np.full((4, 4, 4, 4), 300.0)
+    truth[0, 1:3, 1:3, 1:3] = 1200.0
+    assert hot_volume_ratio(truth, truth) == 1.0
+    assert hot_volume_ratio(truth, np.full_like(truth, 300.0)) == 0.0
+    with pytest.raises(ValueError, match="no voxel above"):
+        hot_volume_ratio(np.full_like(truth, 300.0), truth)

@@ -1,0 +1,56 @@
+"""Time per epoch and memory of the ``paper`` preset, measured over a few epochs.
+
+Runs VG/TV and NN/Tikh. of ``invflame reproduce --preset paper`` (60³ voxels, four cameras of
+32×32 pixels, 650–725 cm⁻¹ at 0.04 cm⁻¹) for ``--epochs`` epochs each through the same runner
+as the full comparison (pretraining shortened to ``--pretrain`` steps: it does not change the
+cost of an epoch), and prints seconds per epoch, parameter memory and the process's peak
+resident memory, next to the paper's Table 1 (GPU, 2000 epochs).
+
+    python benchmarks/bench_paper_epoch.py [--epochs 3] [--pretrain 50] [--out DIR]
+"""
+
+import argparse
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from invflame.experiments import reproduce, runner
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--epochs", type=int, default=3)
+    parser.add_argument("--pretrain", type=int, default=50)
+    parser.add_argument("--out", type=Path, default=None)
+    parser.add_argument("--method", choices=["VG/TV", "NN/Tikh."],
+                        help="measure one method in this process (default: each in its own "
+                        "process, so that peak memories are separate)")
+    args = parser.parse_args()
+    out = args.out or Path(tempfile.mkdtemp(prefix="invflame-paper-epoch-"))
+    if args.method is None:
+        for method in ("VG/TV", "NN/Tikh."):
+            subprocess.run([sys.executable, __file__, "--method", method, "--epochs",
+                            str(args.epochs), "--pretrain", str(args.pretrain), "--out",
+                            str(out)], check=True)
+        return
+    cfg = reproduce.method_config("paper", args.method)
+    if cfg["representation"]["kind"] == "neural":
+        rays = 4 * cfg["rig"]["pixels"] ** 2
+        batches = max(1, rays // cfg["representation"]["rays_per_batch"])
+    else:
+        batches = 1
+    cfg["solver"]["iterations"] = args.epochs * batches
+    cfg["representation"]["pretrain_iterations"] = args.pretrain
+    summary = runner.run_experiment(cfg, out / reproduce.folder_name(args.method),
+                                    progress=False)
+    paper = reproduce.PAPER_TABLE[args.method]
+    print(f"{args.method:>9}: {summary['seconds_per_epoch']:.2f} s per epoch "
+          f"({summary['iterations']} iterations), parameters "
+          f"{summary['parameter_memory_mb']:.2f} MB, process peak "
+          f"{summary['peak_memory_mb']:.0f} MB   [paper, GPU: {paper[0]} ms, {paper[1]} MB]",
+          flush=True)
+
+
+if __name__ == "__main__":
+    main()
