@@ -56,7 +56,8 @@ class ScipyLBFGSB(Solver):
         cache.put(run.x, run.current)
 
         def as_params(flat):
-            return np.asarray(flat, dtype=problem.dtype).reshape(problem.dims)
+            # SciPy works in float64; rounding to the problem's dtype may step over a bound
+            return problem.project(np.asarray(flat, dtype=problem.dtype).reshape(problem.dims))
 
         def fun(flat):
             x = as_params(flat)

@@ -30,8 +30,8 @@ def loss_curves(runs: dict[str, Path], path) -> Path:
         axes[0].semilogy(history["iteration"], history["loss"], label=label)
         axes[1].semilogy(history["iteration"], history["misfit"], label=label)
     axes[0].set(xlabel="iteration (epoch)", ylabel="loss", title="objective")
-    axes[1].set(xlabel="iteration (epoch)", ylabel="mean squared misfit [(W/(m²·sr·cm⁻¹))²]",
-                title="data misfit")
+    axes[1].set(xlabel="iteration (epoch)", ylabel="‖F(θ) − d‖² [(W/(m²·sr·cm⁻¹))²]",
+                title="data misfit (stochastic neural-field runs log their loss only)")
     for ax in axes:
         ax.grid(True, which="both", alpha=0.3)
     axes[0].legend(fontsize=8)
