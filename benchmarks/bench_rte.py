@@ -20,25 +20,14 @@ compiled forward+VJP.
 
 import argparse
 import resource
-import time
 
 import jax
 import jax.numpy as jnp
+from timing import best_time
 
 from invflame.phantoms.registry import make_phantom
 from invflame.scene import Scene
 from operators.emission_rte import _ray_order
-
-
-def best_time(fn, repeats: int) -> float:
-    """Best wall time in s of ``fn()`` (blocked until ready) over ``repeats`` calls."""
-    jax.block_until_ready(fn())  # compile
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        jax.block_until_ready(fn())
-        times.append(time.perf_counter() - start)
-    return min(times)
 
 
 def exp_only(n_segments, batch_rays: int, n_eta: int):

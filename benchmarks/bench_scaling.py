@@ -27,9 +27,9 @@ import json
 import os
 import subprocess
 import sys
-import time
 
 import numpy as np
+from timing import best_time
 
 DEVICES_FLAG = "--xla_force_host_platform_device_count"
 GPU = {
@@ -49,19 +49,6 @@ N_COEF = 12  # table rows per wavenumber: 4 per absorbing species (CO2, H2O) + 4
 N_FIELDS = 4
 SCALING_CONFIG = {"truth": {"grid": 24, "source": "synthetic"}, "rig": {"pixels": 16},
                   "spectrum": {"min": 660.0, "max": 700.0, "step": 0.1}}
-
-
-def best_time(fn, repeats: int) -> float:
-    """Best wall time in s of ``fn()`` (blocked until ready) over ``repeats`` calls."""
-    import jax
-
-    jax.block_until_ready(fn())  # compile
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        jax.block_until_ready(fn())
-        times.append(time.perf_counter() - start)
-    return min(times)
 
 
 # -- 1. strong scaling (child processes) ---------------------------------------------------

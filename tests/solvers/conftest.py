@@ -59,6 +59,22 @@ def nonlinear_problem():
 
 
 @pytest.fixture
+def stochastic_problem(nonlinear_problem):
+    """The nonlinear problem with a random half of the data rows per iteration."""
+    p = nonlinear_problem
+    rows = p.forward.dimsd[0]
+
+    def minibatch(x, iteration, rng):
+        pick = rng.choice(rows, size=rows // 2, replace=False)
+        jac = p.forward.linearize(x)
+        r = np.zeros(rows)
+        r[pick] = (jac.value - p.data)[pick]
+        return float(r @ r), 2 * jac.vjp(None, r)
+
+    return solvers.Problem(p.forward, p.data, x0=p.x0, value_and_grad=minibatch)
+
+
+@pytest.fixture
 def tikhonov_problem():
     """Linear least squares with a first-difference Tikhonov term and its closed-form minimizer.
 

@@ -89,18 +89,9 @@ def test_gauss_newton_refuses_total_variation(nonlinear_forward):
         solvers.solve(p, "gauss-newton")
 
 
-def test_stochastic_problems_only_go_to_first_order_solvers(nonlinear_problem):
-    p = nonlinear_problem
-    rows = p.forward.dimsd[0]
-
-    def minibatch(x, iteration, rng):
-        pick = rng.choice(rows, size=rows // 2, replace=False)
-        jac = p.forward.linearize(x)
-        r = np.zeros(rows)
-        r[pick] = (jac.value - p.data)[pick]
-        return float(r @ r), 2 * jac.vjp(None, r)
-
-    sp = solvers.Problem(p.forward, p.data, x0=p.x0, value_and_grad=minibatch)
+def test_stochastic_problems_only_go_to_first_order_solvers(nonlinear_problem,
+                                                           stochastic_problem):
+    p, sp = nonlinear_problem, stochastic_problem
     for name in ("gauss-newton", "pdhg", "lbfgs", "jaxopt-lbfgs"):
         with pytest.raises(solvers.UnsupportedProblemError, match="stochastic value_and_grad"):
             solvers.solve(sp, name)

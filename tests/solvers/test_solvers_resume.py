@@ -60,18 +60,8 @@ def test_interrupted_and_resumed_run_equals_uninterrupted_run(problem_for, tmp_p
 
 
 @pytest.mark.parametrize("name", ["adam", "gd"])
-def test_stochastic_run_resumes_exactly(nonlinear_problem, tmp_path, name):
-    p = nonlinear_problem
-    rows = p.forward.dimsd[0]
-
-    def minibatch(x, iteration, rng):
-        pick = rng.choice(rows, size=rows // 2, replace=False)
-        jac = p.forward.linearize(x)
-        r = np.zeros(rows)
-        r[pick] = (jac.value - p.data)[pick]
-        return float(r @ r), 2 * jac.vjp(None, r)
-
-    sp = solvers.Problem(p.forward, p.data, x0=p.x0, value_and_grad=minibatch)
+def test_stochastic_run_resumes_exactly(stochastic_problem, tmp_path, name):
+    sp = stochastic_problem
     full = solvers.solve(sp, name, max_iter=9, seed=3, **OPTIONS[name])
     path = tmp_path / "stochastic.npz"
     solvers.solve(sp, name, max_iter=4, seed=3, callbacks=[solvers.Checkpoint(path, every=1)],
