@@ -85,7 +85,8 @@ class GaussNewton(Solver):
     kind_advice = {"neural-field": (
         "Gauss-Newton on a neural field queried at every ray sample builds a huge dense "
         "Jacobian in weight space: use the voxel-centre neural reparameterization "
-        "(kind='neural-centres') or a first-order solver such as 'adam' or 'lbfgs'.")}
+        "(kind='neural-centres'), a first-order solver such as 'adam', or 'lbfgs' on the "
+        "deterministic objective (a problem without a stochastic value_and_grad).")}
     stochastic_ok = False
 
     def check_options(self):

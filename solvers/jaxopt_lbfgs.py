@@ -112,7 +112,8 @@ class JaxoptLBFGS(Solver):
     def step(self, run) -> Step:
         solver, extra, cache = self._setup(run)
         params, state = solver.update(jnp.asarray(run.x), run.state["jaxopt"], **extra)
-        x = np.asarray(params, dtype=run.problem.dtype)
+        # jaxopt's projected iterate may lie a rounding error outside the box
+        x = run.problem.project(np.asarray(params, dtype=run.problem.dtype))
         ev = cache.get(x) or run.evaluate(x)
         error = float(state.error)
         stop = None
