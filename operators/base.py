@@ -264,6 +264,7 @@ class Composition(Operator):
         super().__init__(inner.dims, outer.dimsd, dtype=dtype,
                          name=f"({outer.name} @ {inner.name})")
         self.outer, self.inner = outer, inner
+        self.parts = (outer, inner)
 
     def _forward(self, x):
         return self.outer(self.inner(x))
@@ -300,6 +301,7 @@ class Sum(Operator):
         super().__init__(a.dims, a.dimsd, dtype=np.result_type(a.dtype, b.dtype),
                          name=f"({a.name} + {b.name})")
         self.a, self.b = a, b
+        self.parts = (a, b)
 
     def _forward(self, x):
         return self.a(x) + self.b(x).reshape(self.dimsd)
@@ -317,6 +319,7 @@ class Scaled(Operator):
     def __init__(self, op: Operator, scale: float):
         super().__init__(op.dims, op.dimsd, dtype=op.dtype, name=f"{scale:g}*{op.name}")
         self.op, self.scale = op, float(scale)
+        self.parts = (op,)
 
     def _forward(self, x):
         return self.scale * self.op(x)
@@ -363,6 +366,7 @@ class VStack(Operator):
                          dtype=np.result_type(*[op.dtype for op in ops]),
                          name=name or "VStack[" + ", ".join(op.name for op in ops) + "]")
         self.ops = ops
+        self.parts = tuple(ops)
 
     def _forward(self, x):
         return _join([op(x) for op in self.ops], self.dimsd)
@@ -391,6 +395,7 @@ class BlockDiag(Operator):
                          dtype=np.result_type(*[op.dtype for op in ops]),
                          name=name or "BlockDiag[" + ", ".join(op.name for op in ops) + "]")
         self.ops = ops
+        self.parts = tuple(ops)
 
     def _parts(self, x):
         return _split(x, [op.dims for op in self.ops])
@@ -424,9 +429,9 @@ class _LinearView(LinearOperator):
 
 
 def _linear_if_possible(op: Operator) -> Operator:
-    parts = [getattr(op, name) for name in ("outer", "inner", "a", "b", "op") if hasattr(op, name)]
-    parts += list(getattr(op, "ops", []))
-    return _LinearView(op) if all(p.linear for p in parts) else op
+    """A combination (``op.parts``: the operators it combines) as a linear operator when every
+    part is linear, else unchanged."""
+    return _LinearView(op) if all(p.linear for p in op.parts) else op
 
 
 def vstack(ops: Sequence[Operator], name: str | None = None) -> Operator:
