@@ -222,7 +222,9 @@ def run_experiment(cfg: dict, out_dir, resume: bool = False, progress: bool = Tr
         "mse": normalized_mse(truth.values, fields),
         "mse_initial": normalized_mse(truth.values, start),
         "psnr_db": psnr(truth.values, fields),
-        "hot_volume_ratio": hot_volume_ratio(truth.values, fields),
+        # a truth with no flame (a user's cold field) has no hot volume to compare
+        "hot_volume_ratio": (hot_volume_ratio(truth.values, fields)
+                             if np.any(truth.values[0] > 500.0) else None),
         "seconds_per_iteration": seconds,
         "seconds_per_epoch": None if seconds is None else seconds * batches,
         "parameter_memory_mb": representation.parameter_bytes(result.x) / 1e6,
