@@ -4,11 +4,13 @@ r"""A measurement scene: voxel grid, cameras, gas spectroscopy and instrument, a
 absorption table (spectral window, line-by-line step, pressure) and the FTIR resolution it
 builds, in one call, the voxel forward map
 
-.. math:: H = \text{ILSConvolution} \circ \text{EmissionRTE} \circ \text{VoxelSampling}:
-          f \in \mathbb{R}^{4 \times n_x \times n_y \times n_z}
+.. math:: H = \text{ILSConvolution} \circ \text{RowMean} \circ \text{EmissionRTE} \circ
+          \text{VoxelSampling}: f \in \mathbb{R}^{4 \times n_x \times n_y \times n_z}
           \mapsto g \in \mathbb{R}^{n_\text{rays} \times n_\text{out}},
 
-fields (T in K, mole fractions of CO2, H2O, CH4) to measured spectra in W/(m²·sr·cm⁻¹), both
+fields (T in K, mole fractions of CO2, H2O, CH4) to measured spectra in W/(m²·sr·cm⁻¹), one
+per camera pixel (a "ray" of the data is a pixel; it is the mean of ``rays_per_pixel``
+sub-rays spread over the pixel, :class:`operators.RowMean`), both
 as a composed :class:`operators.Operator` (:attr:`Scene.operator`: jvp, vjp, Jacobian, dot
 and Taylor tests) and as one jitted JAX function (:meth:`Scene.forward`, differentiable with
 ``jax.vjp``/``jax.grad`` through the kernel's custom VJP), which give the same numbers.
@@ -29,7 +31,7 @@ import numpy as np
 
 from invflame.geometry import CameraRig, RaySegments, VoxelGrid, paper_rig, traverse
 from invflame.spectroscopy.absorption_table import AbsorptionTable
-from operators import ILSConvolution, Operator
+from operators import ILSConvolution, Operator, RowMean
 from operators.emission_rte import EmissionRTE, RTETables, batch_rays_for, emission_radiance
 from operators.interop import to_jax, to_numpy
 from operators.sampling import VoxelSampling, sample_voxels
@@ -49,9 +51,10 @@ def _window_slice(wavenumber: np.ndarray, window) -> slice:
     return slice(int(inside[0]), int(inside[-1]) + 1)
 
 
-def _measure(batch_rays, tables, voxel, lengths, ils, fields):
+def _measure(batch_rays, rays_per_pixel, tables, voxel, lengths, ils, fields):
     radiance = emission_radiance(tables, sample_voxels(fields, voxel), lengths, batch_rays)
-    return jnp.matmul(radiance, ils.T, precision=jax.lax.Precision.HIGHEST)
+    pixels = radiance.reshape(-1, rays_per_pixel, radiance.shape[-1]).mean(axis=1)
+    return jnp.matmul(pixels, ils.T, precision=jax.lax.Precision.HIGHEST)
 
 
 class Scene:
@@ -62,7 +65,7 @@ class Scene:
     grid : VoxelGrid
         Reconstruction grid (m).
     rig : CameraRig
-        Cameras; their stacked pixel rays are the measurement rays.
+        Cameras; their stacked pixels are the measurement rays.
     table : AbsorptionTable
         Cross-sections of (CO2, H2O, CH4) on the line-by-line grid (cm⁻¹) at one pressure
         (Pa); its grid step is the line-by-line step.
@@ -85,11 +88,16 @@ class Scene:
         Split the rays of :meth:`forward` over these devices (see
         :func:`operators.sharding.ray_mesh`; an int: the first ``n`` devices). Default
         ``None``: one device, no sharding.
+    rays_per_pixel : int, optional
+        Sub-rays per pixel, ``k²`` for a ``k × k`` stratified subdivision of the pixel (default
+        1). A pixel's spectrum is the mean of its sub-rays'; one ray per pixel leaves voxels
+        between the pixels' centre rays unseen (:func:`invflame.geometry.ray_coverage`).
 
     Attributes
     ----------
     segments : RaySegments
-        Voxels and path lengths (m) of every ray.
+        Voxels and path lengths (m) of every sub-ray, ``n_rays · rays_per_pixel`` rows,
+        pixel-major (the sub-rays of pixel ``p`` are rows ``p·rays_per_pixel`` onwards).
     wavenumber : ndarray, shape (n_eta,)
         Line-by-line grid in cm⁻¹.
     out_wavenumber : ndarray, shape (n_out,)
@@ -101,7 +109,7 @@ class Scene:
     def __init__(self, grid: VoxelGrid, rig: CameraRig, table: AbsorptionTable,
                  resolution: float = 8.0, out_wavenumber=None, window=None,
                  dtype=np.float32, planck: str = "table", memory_budget: int | None = None,
-                 batch_rays: int | None = None, devices=None):
+                 batch_rays: int | None = None, devices=None, rays_per_pixel: int = 1):
         if not isinstance(grid, VoxelGrid):
             raise TypeError(f"grid must be an invflame.geometry.VoxelGrid, got {type(grid)}")
         if not isinstance(rig, CameraRig):
@@ -113,18 +121,20 @@ class Scene:
         band = _window_slice(table.wavenumber, window)
         self.wavenumber = table.wavenumber[band]
         self._coef = table.spline.coef[..., band]
-        self.segments: RaySegments = traverse(grid, *rig.rays())
+        self.rays_per_pixel = int(rays_per_pixel)
+        self.segments: RaySegments = traverse(grid, *rig.rays(rays_per_pixel))
         self.ils = ILSConvolution(self.wavenumber, self.n_rays, resolution, out_wavenumber,
                                   dtype=self.dtype)
         self.out_wavenumber = self.ils.out_wavenumber
         self.tables = RTETables.from_spline(self.wavenumber, table.temperatures, self._coef,
                                             table.pressure, self.dtype, planck)
         self.mesh = None if devices is None else ray_mesh(devices)
-        rays_per_device = self.n_rays if self.mesh is None else -(-self.n_rays
-                                                                   // self.mesh.devices.size)
+        n_traced = self.segments.n_rays
+        rays_per_device = n_traced if self.mesh is None else -(-n_traced
+                                                               // self.mesh.devices.size)
         self.batch_rays = int(batch_rays or batch_rays_for(self.tables, rays_per_device,
                                                            memory_budget))
-        measure = partial(_measure, self.batch_rays)
+        measure = partial(_measure, self.batch_rays, self.rays_per_pixel)
         rays = (self.segments.voxel, self.segments.length.astype(self.dtype))
         ils_matrix = np.asarray(self.ils.matrix, self.dtype)
         if self.mesh is None:
@@ -132,6 +142,9 @@ class Scene:
                             jnp.asarray(ils_matrix))
             self._measure = jax.jit(measure)
         else:  # constants cut and placed once: rays split, tables and instrument replicated
+            # whole pixels per device: pad with copies of the last sub-ray (outputs dropped)
+            pad = self.rays_per_pixel * (-self.n_rays % self.mesh.devices.size)
+            rays = tuple(np.pad(a, [(0, pad), (0, 0)], mode="edge") for a in rays)
             self._arrays = (replicate(self.tables, self.mesh), *place_rays(rays, 0, self.mesh),
                             replicate(ils_matrix, self.mesh))
             sharded = shard_rays(measure, ray_axes=(None, 0, 0, None, None), devices=self.mesh)
@@ -159,8 +172,8 @@ class Scene:
     # -- sizes ---------------------------------------------------------------------------
     @property
     def n_rays(self) -> int:
-        """Number of rays (pixels over all cameras)."""
-        return self.segments.n_rays
+        """Number of measured spectra: pixels over all cameras."""
+        return self.rig.n_rays
 
     @property
     def pressure(self) -> float:
@@ -202,9 +215,18 @@ class Scene:
                            batch_rays=self.batch_rays)
 
     @cached_property
+    def pixel_mean(self) -> RowMean:
+        """Sub-ray spectra ``(n_rays · rays_per_pixel, n_eta)`` → pixel spectra ``(n_rays,
+        n_eta)``."""
+        return RowMean(self.n_rays, self.rays_per_pixel, self.wavenumber.size, dtype=self.dtype)
+
+    @cached_property
     def operator(self) -> Operator:
-        """``ILSConvolution @ EmissionRTE @ VoxelSampling``: ``field_shape → data_shape``."""
-        return self.ils @ self.emission @ self.sampling
+        """``ILSConvolution @ RowMean @ EmissionRTE @ VoxelSampling``: ``field_shape →
+        data_shape`` (the mean over sub-rays is left out with one ray per pixel)."""
+        if self.rays_per_pixel == 1:
+            return self.ils @ self.emission @ self.sampling
+        return self.ils @ self.pixel_mean @ self.emission @ self.sampling
 
     def forward(self, fields):
         """Measured spectra ``(n_rays, n_out)`` in W/(m²·sr·cm⁻¹), one jitted JAX call.

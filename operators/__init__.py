@@ -9,6 +9,7 @@ import jax
 
 jax.config.update("jax_enable_x64", True)
 
+from operators.averaging import RowMean  # noqa: E402
 from operators.base import (  # noqa: E402
     Jacobian,
     LinearOperator,
@@ -63,6 +64,7 @@ __all__ = [
     "Operator",
     "PiecewiseCubic",
     "RTETables",
+    "RowMean",
     "SquaredL2",
     "TorchOperator",
     "VoxelSampling",

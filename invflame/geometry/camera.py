@@ -1,4 +1,8 @@
-"""Pinhole camera: one ray per pixel centre, and the projection of points to pixels.
+"""Pinhole camera: rays through the pixels, and the projection of points to pixels.
+
+A pixel integrates the radiance arriving over its area. :meth:`PinholeCamera.rays` samples
+each pixel by ``k × k`` sub-rays through the centres of a regular ``k × k`` subdivision of the
+pixel (stratified, deterministic); the measured value of a pixel is the mean of its sub-rays'.
 
 Camera frame
 ------------
@@ -133,7 +137,7 @@ class PinholeCamera:
 
     @property
     def n_rays(self) -> int:
-        """Number of rays, one per pixel: ``nu * nv``."""
+        """Number of pixels ``nu * nv`` (one measured spectrum each)."""
         return self.n_pixels[0] * self.n_pixels[1]
 
     @property
@@ -142,27 +146,34 @@ class PinholeCamera:
         w, h = self.sensor_size
         return tuple(float(np.degrees(2 * np.arctan(s / (2 * self.focal_length)))) for s in (w, h))
 
-    def rays(self) -> tuple[np.ndarray, np.ndarray]:
-        """Rays through the pixel centres.
+    def rays(self, rays_per_pixel: int = 1) -> tuple[np.ndarray, np.ndarray]:
+        """Rays through the pixels: ``rays_per_pixel`` stratified sub-rays per pixel.
+
+        Parameters
+        ----------
+        rays_per_pixel : int, optional
+            ``k²`` sub-rays per pixel through the centres of a ``k × k`` subdivision of the
+            pixel (1, 4, 9, 16, ...); default 1, the pixel centre.
 
         Returns
         -------
-        origins : ndarray, shape (nu * nv, 3)
+        origins : ndarray, shape (nu * nv * rays_per_pixel, 3)
             The pinhole position in m, repeated.
-        directions : ndarray, shape (nu * nv, 3)
-            Unit directions (into the scene), row-major: ray ``v * nu + u`` is pixel
-            ``image[v, u]``, row ``v = 0`` at the top of the image.
+        directions : ndarray, shape (nu * nv * rays_per_pixel, 3)
+            Unit directions (into the scene), pixel-major: the sub-rays of pixel
+            ``image[v, u]`` are rows ``p * rays_per_pixel ...`` to ``(p + 1) * rays_per_pixel
+            - 1`` with ``p = v * nu + u``, row ``v = 0`` at the top of the image.
         """
+        k = subdivisions(rays_per_pixel)
         nu, nv = self.n_pixels
         w, h = self.sensor_size
-        x = (np.arange(nu) + 0.5) / nu * w - 0.5 * w  # along right, m on the sensor
-        y = 0.5 * h - (np.arange(nv) + 0.5) / nv * h  # along image_up, decreasing with v
-        yy, xx = np.meshgrid(y, x, indexing="ij")
-        d = (
-            self.focal_length * self.forward
-            + xx.reshape(-1, 1) * self.right
-            + yy.reshape(-1, 1) * self.image_up
-        )
+        sub = (np.arange(k) + 0.5) / k  # sub-ray offsets inside a pixel, in pixels
+        x = ((np.arange(nu)[:, None] + sub).ravel() / nu - 0.5) * w  # along right, m
+        y = (0.5 - (np.arange(nv)[:, None] + sub).ravel() / nv) * h  # along image_up, m
+        yy, xx = np.meshgrid(y, x, indexing="ij")  # (nv k, nu k)
+        # reorder (v, j, u, i) -> (v, u, j, i): the k x k sub-rays of a pixel are consecutive
+        xx, yy = (a.reshape(nv, k, nu, k).transpose(0, 2, 1, 3).reshape(-1, 1) for a in (xx, yy))
+        d = self.focal_length * self.forward + xx * self.right + yy * self.image_up
         d /= np.linalg.norm(d, axis=1, keepdims=True)
         origins = np.broadcast_to(self.position, d.shape).copy()
         return origins, d
@@ -193,6 +204,16 @@ class PinholeCamera:
         u = (c[..., 0] * scale / w + 0.5) * nu
         v = (0.5 - c[..., 1] * scale / h) * nv
         return u, v, depth
+
+
+def subdivisions(rays_per_pixel: int) -> int:
+    """Sub-rays per pixel side ``k`` for ``rays_per_pixel = k²``, with a clear error otherwise."""
+    n = rays_per_pixel
+    k = int(round(np.sqrt(n))) if isinstance(n, int | np.integer) and n > 0 else 0
+    if isinstance(n, bool) or k < 1 or k * k != n:
+        raise ValueError(f"rays_per_pixel must be a perfect square k*k >= 1 (1, 4, 9, 16, ...: "
+                         f"k x k sub-rays per pixel); got {rays_per_pixel!r}")
+    return k
 
 
 def framing_sensor_size(

@@ -46,7 +46,7 @@ class CameraRig:
 
     @property
     def n_rays(self) -> int:
-        """Total number of rays (pixels) over all cameras."""
+        """Total number of pixels (measured spectra) over all cameras."""
         return sum(c.n_rays for c in self.cameras)
 
     @property
@@ -54,9 +54,10 @@ class CameraRig:
         """Start of each camera's rays in the stacked list, plus the total: (n_cameras + 1,)."""
         return np.concatenate([[0], np.cumsum([c.n_rays for c in self.cameras])])
 
-    def rays(self) -> tuple[np.ndarray, np.ndarray]:
-        """Stacked ray origins (n_rays, 3) in m and unit directions (n_rays, 3)."""
-        origins, directions = zip(*(c.rays() for c in self.cameras), strict=True)
+    def rays(self, rays_per_pixel: int = 1) -> tuple[np.ndarray, np.ndarray]:
+        """Stacked ray origins in m and unit directions, shapes ``(n_rays * rays_per_pixel,
+        3)``: camera after camera, pixel-major (see :meth:`PinholeCamera.rays`)."""
+        origins, directions = zip(*(c.rays(rays_per_pixel) for c in self.cameras), strict=True)
         return np.concatenate(origins), np.concatenate(directions)
 
     def split_images(self, values) -> list[np.ndarray]:
