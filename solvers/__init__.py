@@ -19,6 +19,13 @@ from solvers.base import RunState, Solver, Step, UnsupportedProblemError
 from solvers.callbacks import Callback, Checkpoint, ProgressBar
 from solvers.checkpoint import load_checkpoint
 from solvers.history import History, Result
+from solvers.parameter_choice import (
+    ParameterChoice,
+    discrepancy_principle,
+    l_curve,
+    plot_l_curve,
+    problem_weight,
+)
 from solvers.problem import KINDS, Evaluation, Problem, Regularizer
 from solvers.registry import UnknownSolverError, available, get, register
 from solvers.stopping import StoppingRule
@@ -49,6 +56,7 @@ __all__ = [
     "Checkpoint",
     "Evaluation",
     "History",
+    "ParameterChoice",
     "Problem",
     "ProgressBar",
     "Regularizer",
@@ -60,8 +68,12 @@ __all__ = [
     "UnknownSolverError",
     "UnsupportedProblemError",
     "available",
+    "discrepancy_principle",
     "get",
+    "l_curve",
     "load_checkpoint",
+    "plot_l_curve",
+    "problem_weight",
     "register",
     "solve",
 ]

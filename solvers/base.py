@@ -143,7 +143,7 @@ class Solver:
 
     Parameters
     ----------
-    max_iter, rtol_loss, rtol_x, gtol, time_budget
+    max_iter, rtol_loss, rtol_x, gtol, time_budget, loss_window
         Stopping rules, see :class:`solvers.stopping.StoppingRule`.
     **options
         Algorithm options, listed in the solver's ``defaults``.
@@ -160,21 +160,23 @@ class Solver:
 
     def __init__(self, *, max_iter: int = 100, rtol_loss: float | None = None,
                  rtol_x: float | None = None, gtol: float | None = None,
-                 time_budget: float | None = None, **options):
+                 time_budget: float | None = None, loss_window: int = 1, **options):
         unknown = [k for k in options if k not in self.defaults]
         if unknown:
             known = list(self.defaults)
             close = difflib.get_close_matches(unknown[0], known + ["max_iter", "rtol_loss",
                                                                   "rtol_x", "gtol",
-                                                                  "time_budget"], n=1)
+                                                                  "time_budget",
+                                                                  "loss_window"], n=1)
             hint = f" Did you mean {close[0]!r}?" if close else ""
             raise TypeError(
                 f"solver {self.name!r} has no option {unknown[0]!r}.{hint} Its options are "
                 f"{', '.join(known) or '(none)'}, plus the stopping rules max_iter, rtol_loss, "
-                "rtol_x, gtol, time_budget"
+                "rtol_x, gtol, time_budget, loss_window"
             )
         self.options = {**self.defaults, **options}
-        self.stopping = StoppingRule(max_iter, rtol_loss, rtol_x, gtol, time_budget)
+        self.stopping = StoppingRule(max_iter, rtol_loss, rtol_x, gtol, time_budget,
+                                     loss_window)
         self.check_options()
 
     def __repr__(self) -> str:
@@ -277,7 +279,6 @@ class Solver:
 
     def record(self, run: RunState, step: Step) -> str | None:
         """Make ``step`` the current iterate, log it, call callbacks; return a stop reason."""
-        previous = run.current
         dx = float(np.linalg.norm(np.asarray(step.x, np.float64) - run.x))
         x_norm = float(np.linalg.norm(run.x))
         step_ratio = dx / x_norm if x_norm > 0 else (np.inf if dx > 0 else 0.0)
@@ -289,7 +290,7 @@ class Solver:
                 return "callback: a callback asked to stop"
         if step.stop:
             return step.stop
-        return (self.stopping.converged(run.current.loss, previous.loss, step_ratio, grad_norm)
+        return (self.stopping.converged(run.history["loss"], step_ratio, grad_norm)
                 or self.stopping.budget_spent(run.iteration, run.call_seconds))
 
     def _started(self, problem, x0, seed, callbacks) -> RunState:

@@ -19,7 +19,9 @@ class StoppingRule:
     max_iter : int
         Maximum number of iterations in total (a resumed run counts those done before).
     rtol_loss : float, optional
-        Stop when :math:`|L_k - L_{k-1}| \\le \\text{rtol}\\,|L_{k-1}|`.
+        Stop when :math:`|L_k - L_{k-w}| \\le \\text{rtol}\\,|L_{k-w}|` with
+        :math:`w` = ``loss_window``: the objective changed by less than ``rtol`` over the last
+        :math:`w` iterations.
     rtol_x : float, optional
         Stop when :math:`\\|\\theta_k - \\theta_{k-1}\\| \\le \\text{rtol}\\,\\|\\theta_{k-1}\\|`.
     gtol : float, optional
@@ -27,6 +29,9 @@ class StoppingRule:
         parameter unit).
     time_budget : float, optional
         Wall-clock seconds one call to ``run`` may take; checked between iterations.
+    loss_window : int, optional
+        Iterations :math:`w` over which ``rtol_loss`` measures the change (default 1). First-order
+        methods take many small steps: a window (e.g. 20) tells a plateau from a slow step.
     """
 
     max_iter: int = 100
@@ -34,10 +39,13 @@ class StoppingRule:
     rtol_x: float | None = None
     gtol: float | None = None
     time_budget: float | None = None
+    loss_window: int = 1
 
     def __post_init__(self):
         if int(self.max_iter) != self.max_iter or self.max_iter < 0:
             raise ValueError(f"max_iter must be a non-negative integer, got {self.max_iter}")
+        if int(self.loss_window) != self.loss_window or self.loss_window < 1:
+            raise ValueError(f"loss_window must be a positive integer, got {self.loss_window}")
         for name in ("rtol_loss", "rtol_x", "gtol", "time_budget"):
             _check_tolerance(name, getattr(self, name))
 
@@ -53,14 +61,27 @@ class StoppingRule:
             return f"time_budget: {call_seconds:.3g} s >= {self.time_budget:g} s"
         return None
 
-    def converged(self, loss: float, previous_loss: float, step_ratio: float,
-                  grad_norm: float) -> str | None:
-        """Reason to stop after an iteration with these values, or None."""
+    def converged(self, losses, step_ratio: float, grad_norm: float) -> str | None:
+        """Reason to stop after an iteration, or None.
+
+        Parameters
+        ----------
+        losses : array_like
+            Objective at every iteration so far, the starting point first and the new
+            iterate last.
+        step_ratio : float
+            Relative change of the parameters in this iteration.
+        grad_norm : float
+            Norm of the projected gradient at the new iterate.
+        """
         if self.gtol is not None and grad_norm <= self.gtol:
             return f"gtol: gradient norm {grad_norm:.3e} <= {self.gtol:g}"
-        if self.rtol_loss is not None and abs(loss - previous_loss) <= self.rtol_loss * abs(
-                previous_loss):
-            return f"rtol_loss: relative loss change <= {self.rtol_loss:g}"
+        w = self.loss_window
+        if self.rtol_loss is not None and len(losses) > w:
+            loss, before = losses[-1], losses[-1 - w]
+            if abs(loss - before) <= self.rtol_loss * abs(before):
+                over = "" if w == 1 else f" over {w} iterations"
+                return f"rtol_loss: relative loss change{over} <= {self.rtol_loss:g}"
         if self.rtol_x is not None and step_ratio <= self.rtol_x:
             return f"rtol_x: relative parameter change {step_ratio:.3e} <= {self.rtol_x:g}"
         return None

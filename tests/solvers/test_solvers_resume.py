@@ -103,6 +103,16 @@ def test_stopping_rules_and_callbacks(nonlinear_problem):
     assert solvers.solve(p, "gd", rtol_loss=1e-3).stop_reason.startswith("rtol_loss")
     assert solvers.solve(p, "gd", rtol_x=1e-3).stop_reason.startswith("rtol_x")
     assert solvers.solve(p, "gd", gtol=1e-4).stop_reason.startswith("gtol")
+    # over a window: stops once the loss changed less than rtol over the last 5 iterations
+    windowed = solvers.solve(p, "gd", rtol_loss=1e-3, loss_window=5, max_iter=500)
+    assert windowed.stop_reason.startswith("rtol_loss") and "over 5 iterations" in \
+        windowed.stop_reason
+    loss = windowed.history["loss"]
+    assert abs(loss[-1] - loss[-6]) <= 1e-3 * abs(loss[-6])
+    assert all(abs(loss[k] - loss[k - 5]) > 1e-3 * abs(loss[k - 5])
+               for k in range(5, len(loss) - 1))
+    with pytest.raises(ValueError, match="loss_window must be a positive integer"):
+        solvers.solve(p, "gd", loss_window=0)
     timed = solvers.solve(p, "gd", time_budget=0.0)
     assert timed.stop_reason.startswith("time_budget") and timed.iterations == 0
     stopped = solvers.solve(p, "gd", callbacks=[lambda run: run.iteration == 3])
