@@ -90,8 +90,9 @@ class Scene:
         ``None``: one device, no sharding.
     rays_per_pixel : int, optional
         Sub-rays per pixel, ``k²`` for a ``k × k`` stratified subdivision of the pixel (default
-        1). A pixel's spectrum is the mean of its sub-rays'; one ray per pixel leaves voxels
-        between the pixels' centre rays unseen (:func:`invflame.geometry.ray_coverage`).
+        1; :meth:`paper` and configurations use 9). A pixel's spectrum is the mean of its
+        sub-rays'; one ray per pixel leaves voxels between the pixels' centre rays unseen
+        (:func:`invflame.geometry.ray_coverage`).
 
     Attributes
     ----------
@@ -152,7 +153,7 @@ class Scene:
 
     @classmethod
     def paper(cls, n_cells: int = 60, n_pixels: int = 32, table: AbsorptionTable | None = None,
-              **kwargs) -> Scene:
+              rays_per_pixel: int = 9, **kwargs) -> Scene:
         """The study's configuration: 1 m cube of ``n_cells``³ voxels (y up), four cameras of
         ``n_pixels``² pixels at 1.5 m, 650–725 cm⁻¹ at 0.04 cm⁻¹, 8 cm⁻¹ resolution.
 
@@ -160,6 +161,10 @@ class Scene:
         ----------
         n_cells, n_pixels : int, optional
             Grid cells per axis and pixels per image side.
+        rays_per_pixel : int, optional
+            Sub-rays per pixel (default 9 = 3 × 3: with the pixel footprint about 2.9 voxels
+            wide, every voxel is crossed; one ray per pixel leaves 46 % of the 60³ voxels
+            unseen, ``benchmarks/ray_coverage.py``).
         table : AbsorptionTable, optional
             Default :meth:`AbsorptionTable.default` (built once, then cached on disk).
         **kwargs
@@ -167,7 +172,8 @@ class Scene:
         """
         grid = VoxelGrid.poolfire(n_cells)
         table = AbsorptionTable.default() if table is None else table
-        return cls(grid, paper_rig(grid, n_pixels=n_pixels), table, **kwargs)
+        return cls(grid, paper_rig(grid, n_pixels=n_pixels), table,
+                   rays_per_pixel=rays_per_pixel, **kwargs)
 
     # -- sizes ---------------------------------------------------------------------------
     @property

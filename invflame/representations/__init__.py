@@ -7,7 +7,9 @@
                     (:class:`NeuralCentresRepresentation`)
 
 All share the fixed normalization of :mod:`invflame.representations.normalization` and offer
-``initial_parameters``, ``problem(data, regularizer, lam, x0)``, ``fields(theta)`` and
+``initial_parameters``, ``problem(data, regularizer, lam, x0, sigma)`` (misfit weighted by the
+noise σ, :mod:`invflame.representations.whitening`), ``fields(theta)``,
+``iterations_per_epoch`` (solver iterations per pass over all pixels) and
 ``parameter_bytes(theta)``.
 """
 

@@ -20,9 +20,14 @@ import numpy as np
 import torch
 
 import solvers
-from invflame.representations.neural import TORCH_DTYPES
-from invflame.representations.neural_field import FieldNetwork, centre_points, pretrain
-from invflame.representations.voxel import regularizer_for
+from invflame.representations.neural_field import (
+    TORCH_DTYPES,
+    FieldNetwork,
+    centre_points,
+    pretrain,
+    regularizer_after,
+)
+from invflame.representations.whitening import whitened
 from operators import Operator, TorchOperator
 
 
@@ -44,6 +49,8 @@ class NeuralCentresRepresentation:
     """
 
     kind = "neural-centres"
+    iterations_per_epoch = 1
+    """Every solver iteration uses all pixels."""
 
     def __init__(self, scene, n_frequencies: int = 10, hidden: int = 64, depth: int = 4,
                  seed: int = 0, forward: Operator | None = None):
@@ -86,15 +93,12 @@ class NeuralCentresRepresentation:
     def regularizer(self, kind: str) -> solvers.Regularizer | None:
         """:math:`\\Phi = g \\circ (D \\circ u_\\theta(c))` for ``kind`` in {"none", "tikhonov",
         "tv"} (None for "none"): the voxel regularizer after the normalized network."""
-        composite = regularizer_for(kind, self.grid)
-        if composite is None:
-            return None
-        return solvers.Regularizer(composite.functional,
-                                   composite.op @ self.normalized_at_centres)
+        return regularizer_after(kind, self.grid, self.normalized_at_centres)
 
-    def problem(self, data, regularizer: str = "none", lam: float = 1e-3,
-                x0=None) -> solvers.Problem:
-        """The inverse problem on network weights (kind ``"neural-centres"``).
+    def problem(self, data, regularizer: str = "none", lam: float = 1e-3, x0=None,
+                sigma=None) -> solvers.Problem:
+        r"""The inverse problem on network weights (kind ``"neural-centres"``): minimize
+        :math:`\sum ((F(\theta) - d)/\sigma)^2 + \lambda \Phi(\theta)`.
 
         Parameters
         ----------
@@ -103,14 +107,19 @@ class NeuralCentresRepresentation:
         regularizer : {"none", "tikhonov", "tv"}
             See :meth:`regularizer`.
         lam : float
-            Weight λ (default 1e-3).
+            Weight λ (default 1e-3), on the scale of the noise-weighted sum of squares.
         x0 : ndarray, optional
             Starting weights, e.g. from :meth:`initial_parameters`.
+        sigma : float or array_like, optional
+            Noise standard deviation in W/(m²·sr·cm⁻¹), a scalar or broadcastable to
+            ``(n_rays, n_out)`` (see :mod:`invflame.representations.whitening`); None means 1.
         """
+        forward, weighted = whitened(self.forward, data, sigma)
         return solvers.Problem(
-            self.forward, data, regularizer=self.regularizer(regularizer), lam=lam, x0=x0,
+            forward, weighted, regularizer=self.regularizer(regularizer), lam=lam, x0=x0,
             kind=self.kind, name=f"neural-centres/{regularizer}",
-            metadata={"representation": self.kind, "regularizer": regularizer, "lambda": lam},
+            metadata={"representation": self.kind, "regularizer": regularizer, "lambda": lam,
+                      "noise_weighted": sigma is not None},
         )
 
     def fields(self, theta) -> np.ndarray:

@@ -28,11 +28,17 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
+import solvers
 from invflame.geometry import VoxelGrid
 from invflame.representations.normalization import SCALES
+from invflame.representations.voxel import regularizer_for
+from operators import Operator
 
 AMBIENT_START = (300.0, 0.02, 0.02, 0.02)
 """Fields (T in K, mole fractions) of an untrained network: the last layer's bias values."""
+
+TORCH_DTYPES = {np.dtype(np.float32): torch.float32, np.dtype(np.float64): torch.float64}
+"""Torch dtype of a scene's NumPy dtype."""
 
 
 def _logit(p: float) -> float:
@@ -160,30 +166,6 @@ class FieldNetwork(torch.nn.Module):
             out = out / self.scales.reshape((4,) + (1,) * (out.ndim - 1))
         return out
 
-    def spatial_gradient(self, theta: torch.Tensor, points: torch.Tensor) -> torch.Tensor:
-        """:math:`\\partial u / \\partial x_d` of the normalized fields, in 1/m.
-
-        Forward-mode derivatives along each axis (three JVPs), differentiable in ``theta``.
-
-        Parameters
-        ----------
-        theta : torch.Tensor, shape (n_parameters,)
-        points : torch.Tensor, shape (..., 3)
-            Positions in m.
-
-        Returns
-        -------
-        torch.Tensor, shape (3, 4, ...)
-            Axis d, then field.
-        """
-        def u(p):
-            return self.evaluate(theta, p, normalized=True)
-
-        eye = torch.eye(3, dtype=points.dtype, device=points.device)
-        return torch.stack([
-            torch.func.jvp(u, (points,), (eye[d].expand_as(points),))[1] for d in range(3)
-        ])
-
     def _check(self, theta: torch.Tensor) -> torch.Tensor:
         if theta.shape != (self.n_parameters,):
             raise ValueError(f"weight vector must have shape ({self.n_parameters},) for this "
@@ -204,6 +186,35 @@ def _linear(n_in: int, n_out: int, generator: torch.Generator, dtype) -> torch.n
 def centre_points(grid: VoxelGrid, dtype=torch.float32) -> torch.Tensor:
     """Voxel centres of ``grid`` in m as a tensor ``(nx, ny, nz, 3)``."""
     return torch.as_tensor(grid.centres(), dtype=dtype)
+
+
+def regularizer_after(kind: str, grid: VoxelGrid,
+                      normalized: Operator) -> solvers.Regularizer | None:
+    r"""The voxel regularizer of the normalized fields an operator produces.
+
+    :math:`\Phi(\theta) = g(D\,u(\theta))`, with the forward-difference gradient :math:`D`
+    (1/m) and outer functional :math:`g` of
+    :func:`~invflame.representations.voxel.regularizer_for`, after ``normalized``
+    (:math:`\theta \mapsto u`, e.g. a network at the voxel centres): the voxel regularizer of
+    :math:`u(\theta)`.
+
+    Parameters
+    ----------
+    kind : {"none", "tikhonov", "tv"}
+        Regularizer; None is returned for "none".
+    grid : VoxelGrid
+        Grid of the fields (shape and spacing in m).
+    normalized : operators.Operator
+        Parameters to normalized fields ``(4, nx, ny, nz)`` (:math:`u = f/s`, dimensionless).
+
+    Returns
+    -------
+    solvers.Regularizer or None
+    """
+    composite = regularizer_for(kind, grid)
+    if composite is None:
+        return None
+    return solvers.Regularizer(composite.functional, composite.op @ normalized)
 
 
 def pretrain(network: FieldNetwork, target, iterations: int = 2000, lr: float = 1e-3,

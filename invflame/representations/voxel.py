@@ -13,6 +13,7 @@ from invflame.representations.normalization import (
     normalize,
     physical_bounds,
 )
+from invflame.representations.whitening import whitened
 
 REGULARIZERS = ("none", "tikhonov", "tv")
 
@@ -55,6 +56,7 @@ class VoxelRepresentation:
     """
 
     kind = "voxel"
+    iterations_per_epoch = 1
 
     def __init__(self, grid: VoxelGrid, forward: op.Operator,
                  temperature_range=(250.0, 2500.0)):
@@ -78,8 +80,9 @@ class VoxelRepresentation:
         return np.clip(normalize(fields), self.lower, self.upper).astype(self.forward.dtype)
 
     def problem(self, data, regularizer: str = "none", lam: float = 1e-3,
-                x0=None) -> solvers.Problem:
-        """The inverse problem on voxel values.
+                x0=None, sigma=None) -> solvers.Problem:
+        """The inverse problem on voxel values: minimize
+        :math:`\\sum ((H(\\theta) - d)/\\sigma)^2 + \\lambda \\Phi(\\theta)`.
 
         Parameters
         ----------
@@ -88,12 +91,16 @@ class VoxelRepresentation:
         regularizer : {"none", "tikhonov", "tv"}
             See :func:`regularizer_for`.
         lam : float
-            Weight λ (default 1e-3, the paper's).
+            Weight λ on the sum-of-squares scale (default 1e-3).
         x0 : ndarray, optional
             Starting parameters (normalized), e.g. from :meth:`initial_parameters`.
+        sigma : float or array_like, optional
+            Noise standard deviation in W/(m²·sr·cm⁻¹) (scalar, per wavenumber or per value);
+            None: unweighted misfit. See :mod:`invflame.representations.whitening`.
         """
+        forward, data = whitened(self.forward, data, sigma)
         return solvers.Problem(
-            self.forward, data, regularizer=regularizer_for(regularizer, self.grid), lam=lam,
+            forward, data, regularizer=regularizer_for(regularizer, self.grid), lam=lam,
             lower=self.lower, upper=self.upper, x0=x0, kind="voxel",
             name=f"voxel/{regularizer}",
             metadata={"representation": "voxel", "regularizer": regularizer, "lambda": lam},

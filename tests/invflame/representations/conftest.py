@@ -1,5 +1,6 @@
 """A tiny measurement scene for the representation tests: 8³ grid, 2 cameras of 6×6 pixels,
-99 wavenumbers (every 19th point of the default 650–725 cm⁻¹ table)."""
+99 wavenumbers (every 19th point of the default 650–725 cm⁻¹ table); one ray per pixel, or
+2 × 2 sub-rays per pixel."""
 
 import numpy as np
 import pytest
@@ -18,10 +19,10 @@ def tiny_table() -> AbsorptionTable:
                            table.temperatures, table.sigma[:, :, band], table.self_fraction)
 
 
-def _scene(table, dtype) -> Scene:
+def _scene(table, dtype, rays_per_pixel: int = 1) -> Scene:
     grid = VoxelGrid.poolfire(8)
     rig = CameraRig(paper_rig(grid, n_pixels=6).cameras[:2])
-    return Scene(grid, rig, table, dtype=dtype)
+    return Scene(grid, rig, table, dtype=dtype, rays_per_pixel=rays_per_pixel)
 
 
 @pytest.fixture(scope="session")
@@ -34,6 +35,12 @@ def tiny_scene(tiny_table) -> Scene:
 def tiny_scene64(tiny_table) -> Scene:
     """float64 scene, for derivative checks."""
     return _scene(tiny_table, np.float64)
+
+
+@pytest.fixture(scope="session")
+def pixel_scene64(tiny_table) -> Scene:
+    """float64 scene with 4 sub-rays per pixel."""
+    return _scene(tiny_table, np.float64, rays_per_pixel=4)
 
 
 @pytest.fixture(scope="session")

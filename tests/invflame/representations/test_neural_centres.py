@@ -64,3 +64,13 @@ def test_gauss_newton_runs_on_network_weights(centres32):
     result = solvers.solve(problem, "gauss-newton", max_iter=2, inner_iter=10)
     assert result.iterations >= 1
     assert problem.objective(result.x) < 0.5 * problem.objective(theta)
+
+
+def test_noise_weighted_objective_divides_the_residuals_by_sigma(centres32):
+    rep, theta, data = centres32
+    sigma = np.linspace(1.0, 3.0, data.shape[1]) * 1e-2 * np.abs(data).max()
+    problem = rep.problem(data, "tv", lam=0.5, x0=theta, sigma=sigma)
+    residual = (rep.forward(theta) - data) / sigma
+    expected = np.sum(residual**2) + 0.5 * rep.regularizer("tv")(theta)
+    assert problem.objective(theta) == pytest.approx(expected, rel=1e-5)
+    assert rep.iterations_per_epoch == 1

@@ -1,4 +1,4 @@
-"""The field network: shapes, ranges, flat weights, spatial derivatives, pretraining."""
+"""The field network: shapes, ranges, flat weights, pretraining."""
 
 import numpy as np
 import pytest
@@ -48,35 +48,6 @@ def test_flat_weights_round_trip_and_drive_the_evaluation():
                                                                                     None, None])
     with pytest.raises(ValueError, match="weight vector must have shape"):
         a.evaluate(theta_b[:-1], points)
-
-
-def test_spatial_gradient_matches_reverse_mode_derivative():
-    network = FieldNetwork(GRID, seed=2, dtype=torch.float64)
-    theta = torch.tensor(network.parameter_vector())
-    points = torch.tensor(np.random.default_rng(4).uniform(0.0, 1.0, (5, 3)) - [0.5, 0, 0.5])
-    grads = network.spatial_gradient(theta, points)  # (3, 4, 5)
-    assert grads.shape == (3, 4, 5)
-    for i in range(5):
-        jac = torch.autograd.functional.jacobian(
-            lambda p: network.normalized(p[None])[:, 0], points[i])  # (4, 3)
-        torch.testing.assert_close(grads[:, :, i], jac.T, rtol=1e-10, atol=1e-12)
-
-
-def test_spatial_gradient_is_differentiable_in_the_weights():
-    network = FieldNetwork(GRID, seed=2, dtype=torch.float64)
-    theta = torch.tensor(network.parameter_vector(), requires_grad=True)
-    points = centre_points(GRID, torch.float64)[:2, :2, :2].reshape(-1, 3)
-    direction = torch.randn(theta.shape, dtype=torch.float64,
-                            generator=torch.Generator().manual_seed(0))
-
-    def value(t):
-        return torch.sum(network.spatial_gradient(t, points) ** 2)
-
-    value(theta).backward()
-    h = 1e-6
-    with torch.no_grad():
-        numeric = (value(theta + h * direction) - value(theta - h * direction)) / (2 * h)
-    assert torch.dot(theta.grad, direction).item() == pytest.approx(numeric.item(), rel=1e-5)
 
 
 def test_pretraining_fits_the_target_field(plume):

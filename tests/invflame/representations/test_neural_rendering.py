@@ -1,5 +1,7 @@
 """The NeRF-like representation: sampling, rendering against the voxel map, the problem."""
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 import torch
@@ -72,26 +74,52 @@ def _voxel_lookup(grid, values):
     return field
 
 
-def test_rendering_converges_to_the_voxel_forward_map(tiny_scene64, plume):
+@pytest.mark.parametrize("scene_name", ["tiny_scene64", "pixel_scene64"])
+def test_rendering_converges_to_the_voxel_forward_map(scene_name, plume, request):
     """Sampled finely, the renderer of a voxel field reproduces the voxel forward map: the
-    same emission physics; the only difference is where samples straddle voxel faces."""
-    expected = tiny_scene64.simulate(plume)
-    field = _voxel_lookup(tiny_scene64.grid, plume)
-    renderer = NeuralRenderer(tiny_scene64, n_coarse=256, n_fine=256)
+    same emission physics and the same mean over a pixel's sub-rays; the only difference is
+    where samples straddle voxel faces."""
+    scene = request.getfixturevalue(scene_name)
+    expected = scene.simulate(plume)
+    field = _voxel_lookup(scene.grid, plume)
+    renderer = NeuralRenderer(scene, n_coarse=256, n_fine=256)
+    assert renderer.batch_sub_rays == scene.n_rays * scene.rays_per_pixel
     coarse, fine = renderer.render(torch.arange(renderer.n_rays), field, field,
                                    *renderer.deterministic_draws())
+    assert coarse.shape == fine.shape == scene.data_shape
     scale = np.abs(expected).max()
     assert np.abs(coarse.numpy() - expected).max() < 0.01 * scale
     assert np.abs(fine.numpy() - expected).max() < 0.01 * scale
-    rough = NeuralRenderer(tiny_scene64, n_coarse=8, n_fine=0)
+    rough = NeuralRenderer(scene, n_coarse=8, n_fine=0)
     coarse8, _ = rough.render(torch.arange(rough.n_rays), field, field,
                               *rough.deterministic_draws())
     assert np.abs(coarse8.numpy() - expected).max() > 0.02 * scale  # the test can fail
 
 
+def test_a_pixel_is_the_mean_of_its_sub_rays(pixel_scene64, plume):
+    """Rendered as pixels of their own, the sub-rays of a pixel differ; the pixel's spectrum
+    is their mean."""
+    scene = pixel_scene64
+    as_pixels = SimpleNamespace(
+        n_rays=scene.segments.n_rays, rays_per_pixel=1, segments=scene.segments,
+        dtype=scene.dtype, ils=scene.ils, table=scene.table, tables=scene.tables,
+        memory_budget=scene.memory_budget)
+    field = _voxel_lookup(scene.grid, plume)
+    pixels, sub_rays = (NeuralRenderer(s, n_coarse=16, n_fine=0) for s in (scene, as_pixels))
+    assert sub_rays.n_rays == 4 * pixels.n_rays
+    mean = pixels.render(torch.arange(pixels.n_rays), field, field,
+                         *pixels.deterministic_draws())[0].numpy()
+    single = sub_rays.render(torch.arange(sub_rays.n_rays), field, field,
+                             *sub_rays.deterministic_draws())[0].numpy()
+    single = single.reshape(pixels.n_rays, 4, -1)
+    np.testing.assert_allclose(mean, single.mean(axis=1), rtol=1e-12)
+    hot = np.argmax(mean.max(axis=1))
+    assert np.ptp(single[hot].max(axis=1)) > 0.01 * mean[hot].max()  # sub-rays differ
+
+
 @pytest.fixture(scope="module")
-def neural64(tiny_scene64, plume):
-    rep = NeuralFieldRepresentation(tiny_scene64, n_coarse=8, n_fine=8, batch_rays=36,
+def neural64(pixel_scene64, plume):
+    rep = NeuralFieldRepresentation(pixel_scene64, n_coarse=8, n_fine=8, batch_rays=36,
                                     batch_centres=64)
     theta = rep.initial_parameters(plume, iterations=30, lr=3e-3, progress=False)
     return rep, theta
@@ -99,11 +127,15 @@ def neural64(tiny_scene64, plume):
 
 def test_deterministic_forward_operator_has_consistent_derivatives(neural64, plume):
     rep, theta = neural64
-    problem = rep.problem(rep.scene.simulate(plume), "tikhonov", x0=theta)
+    sigma = np.linspace(1.0, 2.0, rep.scene.data_shape[1])
+    data = rep.scene.simulate(plume)
+    problem = rep.problem(data, "tikhonov", x0=theta, sigma=sigma)
     forward = problem.forward
     assert forward.dims == (rep.n_parameters,) and forward.dimsd == rep.scene.data_shape
     value = forward(theta)
     assert value.shape == rep.scene.data_shape and np.all(value > 0)
+    np.testing.assert_allclose(problem.data, data / sigma)
+    np.testing.assert_allclose(value * sigma, rep.problem(data).forward(theta), rtol=1e-12)
     assert operators.jacobian_dottest(forward, theta, rtol=1e-9).passed
     fine_only = np.zeros_like(theta)
     fine_only[rep.coarse.n_parameters:] = np.random.default_rng(0).standard_normal(
@@ -128,15 +160,43 @@ def test_stochastic_gradient_passes_a_taylor_test(neural64, plume):
     assert result.passed, str(result)
 
 
-def test_stochastic_regularizer_estimates_the_deterministic_one(neural64):
-    rep, theta = neural64
-    theta_f = rep.split(torch.tensor(theta))[1]
-    for kind in ("tikhonov", "tv"):
-        full = rep._regularizer(kind)(theta)
-        assert rep.regularizer_terms(theta_f, rep.centres, kind).item() == pytest.approx(full)
-        batches = [rep.regularizer_terms(theta_f, rep.centres[i], kind).item()
-                   for i in np.random.default_rng(0).integers(0, 512, (10, 128))]
-        assert np.mean(batches) == pytest.approx(full, rel=0.15)
+def test_epoch_batches_cover_every_pixel_without_repeats_in_a_batch(tiny_scene):
+    rep = NeuralFieldRepresentation(tiny_scene, n_coarse=4, n_fine=4, batch_rays=10, seed=3)
+    assert rep.iterations_per_epoch == 8  # ceil(72 / 10)
+    batches = rep.epoch_batches(5)
+    assert batches.shape == (8, 10)
+    assert set(batches.ravel()) == set(range(72))
+    assert all(len(set(batch)) == 10 for batch in batches)
+    np.testing.assert_array_equal(batches, rep.epoch_batches(5))  # a resume sees the same
+    assert not np.array_equal(batches, rep.epoch_batches(6))
+    whole = NeuralFieldRepresentation(tiny_scene, n_coarse=4, n_fine=4, batch_rays=500)
+    assert whole.iterations_per_epoch == 1 and whole.renderer.batch_rays == 72
+
+
+def test_an_epoch_of_batch_losses_averages_to_the_deterministic_objective(pixel_scene64, plume):
+    """With the samples of the evaluation (bin midpoints), equal coarse and fine weights (no
+    importance samples, so both renderings agree) and the regularizer over all centres, the
+    batch losses of an epoch average to the deterministic, noise-weighted objective: the
+    training loss estimates the same sum of squares and the same λΦ."""
+    rep = NeuralFieldRepresentation(pixel_scene64, n_coarse=8, n_fine=0, batch_rays=24,
+                                    batch_centres=10**6)
+    fine = rep.initial_parameters(plume, iterations=20, lr=3e-3, progress=False)
+    theta = np.concatenate([fine[rep.coarse.n_parameters:]] * 2)
+    sigma = np.linspace(0.5, 1.5, rep.scene.data_shape[1]) * 1e-3
+    start = plume.copy()
+    start[0] = 0.9 * plume[0] + 30.0
+    data = rep.scene.simulate(start)
+    for kind in ("none", "tv"):
+        problem = rep.problem(data, kind, lam=0.3, x0=theta, sigma=sigma)
+        objective = problem.value_and_grad
+        draws = rep.renderer.deterministic_draws()
+        centres = torch.arange(rep.grid.n_voxels)
+        losses = [objective.loss(torch.tensor(theta), torch.as_tensor(pixels), *draws,
+                                 centres).item()
+                  for pixels in rep.epoch_batches(0)]
+        assert rep.iterations_per_epoch == len(losses) == 3
+        assert np.mean(losses) == pytest.approx(problem.objective(theta), rel=1e-10)
+        assert np.ptp(losses) > 0.01 * np.mean(losses)  # the batches do differ
 
 
 def test_adam_lowers_the_neural_field_loss(tiny_scene, plume):

@@ -1,0 +1,196 @@
+r"""Synthetic measurements without the inverse crime, and FTIR noise.
+
+Data made by the very model, grid and spectral grid that then invert them (the "inverse
+crime", Kaipio & Somersalo, *Statistical and Computational Inverse Problems*, 2005, sec. 1.2)
+fit to round-off and flatter any method. By default :func:`simulate_measurement` renders the
+truth instead
+
+* on its **native grid** (the 60³ OpenFOAM cells of the pool fire, whatever the reconstruction
+  grid; a field file on its own grid),
+* with **more sub-rays per pixel** (``data.rays_per_pixel``, default 25 = 5 × 5, against the
+  reconstruction's 9),
+* on a **finer line-by-line grid** (``spectrum.step / data.step_divisor``),
+
+through the same cameras and instrument, then adds noise.
+
+Noise
+-----
+An imaging FTIR spectrometer's noise is quoted as a noise-equivalent spectral radiance (NESR):
+the standard deviation of a calibrated spectrum, per spectral sample, in W/(m²·sr·cm⁻¹).
+Makers of long-wave imaging FTS specify an NESR of the order of 20 nW/(cm²·sr·cm⁻¹) = 2e-4
+W/(m²·sr·cm⁻¹) in the middle of their band for one calibrated cube (e.g. the Telops
+Hyper-Cam LW specification). The 650–725 cm⁻¹ window lies at the long-wave edge of an
+MCT detector's response, where the NESR rises steeply; the default
+:data:`DEFAULT_NESR` = 1e-3 W/(m²·sr·cm⁻¹) (100 nW/(cm²·sr·cm⁻¹)) assumes five times the
+band-centre figure there. Give your instrument's NESR, constant or per wavenumber (a two-column
+file), or a peak signal-to-noise ratio instead.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from invflame.field import Field
+from invflame.scene import Scene
+from invflame.spectroscopy.absorption_table import AbsorptionTable
+
+DEFAULT_NESR = 1e-3
+"""Default noise-equivalent spectral radiance in W/(m²·sr·cm⁻¹) (see the module docstring)."""
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """Measured spectra and their noise.
+
+    Attributes
+    ----------
+    data : ndarray, shape (n_rays, n_out)
+        Spectra per pixel in W/(m²·sr·cm⁻¹).
+    sigma : ndarray, shape (n_out,)
+        Noise standard deviation per output wavenumber in W/(m²·sr·cm⁻¹) (ones for
+        noise-free data, so that a whitened misfit is the plain sum of squares).
+    noisy : bool
+        Whether noise was added (False: ``sigma`` carries no information).
+    provenance : dict
+        How the data were made (grid, sub-rays, step, noise).
+    """
+
+    data: np.ndarray
+    sigma: np.ndarray
+    noisy: bool
+    provenance: dict
+
+    @property
+    def n_measurements(self) -> int:
+        """Number of measured values M (pixels × output wavenumbers)."""
+        return int(self.data.size)
+
+
+def read_nesr(path, out_wavenumber) -> np.ndarray:
+    """NESR per output wavenumber from a text file of ``wavenumber NESR`` rows.
+
+    Parameters
+    ----------
+    path : str or Path
+        Whitespace- or comma-separated rows: wavenumber in cm⁻¹ (increasing), NESR in
+        W/(m²·sr·cm⁻¹); lines starting with ``#`` are comments.
+    out_wavenumber : array_like
+        Output grid in cm⁻¹; the file must cover it. Linear interpolation in between.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"noise.nesr file not found: {path} (give a number in "
+                                "W/(m2 sr cm-1) or a file of 'wavenumber NESR' rows)")
+    try:
+        table = np.loadtxt(path, delimiter=None if "," not in path.read_text() else ",",
+                           ndmin=2)
+    except ValueError as err:
+        raise ValueError(f"{path}: not a table of 'wavenumber NESR' rows: {err}") from None
+    if table.shape[1] != 2 or table.shape[0] < 2:
+        raise ValueError(f"{path}: need at least 2 rows of 2 columns (wavenumber cm-1, NESR "
+                         f"W/(m2 sr cm-1)); got shape {table.shape}")
+    eta, nesr = table.T
+    if np.any(np.diff(eta) <= 0) or np.any(~np.isfinite(table)) or np.any(nesr <= 0):
+        raise ValueError(f"{path}: wavenumbers must increase and NESR values be finite and "
+                         "positive")
+    out = np.asarray(out_wavenumber, dtype=np.float64)
+    if out.min() < eta[0] or out.max() > eta[-1]:
+        raise ValueError(f"{path}: covers {eta[0]:g}-{eta[-1]:g} cm-1 but the instrument "
+                         f"samples {out.min():g}-{out.max():g} cm-1")
+    return np.interp(out, eta, nesr)
+
+
+def noise_sigma(noise: dict, clean: np.ndarray, out_wavenumber) -> np.ndarray | None:
+    """Noise standard deviation per output wavenumber (W/(m²·sr·cm⁻¹)), or None for none.
+
+    Parameters
+    ----------
+    noise : dict
+        The configuration's ``[noise]``: ``kind`` "nesr" (``nesr`` a number or a file, see
+        :func:`read_nesr`), "snr" (``max |clean| / snr``) or "none".
+    clean : ndarray, shape (n_rays, n_out)
+        Noise-free spectra, W/(m²·sr·cm⁻¹).
+    out_wavenumber : array_like, shape (n_out,)
+        Output grid in cm⁻¹.
+    """
+    n_out = len(out_wavenumber)
+    if noise["kind"] == "none":
+        return None
+    if noise["kind"] == "snr":
+        return np.full(n_out, np.abs(clean).max() / noise["snr"])
+    if isinstance(noise["nesr"], str):
+        return read_nesr(noise["nesr"], out_wavenumber)
+    return np.full(n_out, float(noise["nesr"]))
+
+
+def add_noise(clean: np.ndarray, sigma, seed: int) -> np.ndarray:
+    """``clean`` plus independent Gaussian noise of standard deviation ``sigma``.
+
+    Parameters
+    ----------
+    clean : ndarray, shape (n_rays, n_out)
+        Spectra, W/(m²·sr·cm⁻¹).
+    sigma : float or array_like broadcastable to ``clean`` (e.g. shape (n_out,))
+        Standard deviation, same unit, > 0.
+    seed : int
+        Seed of the noise.
+    """
+    sigma = np.asarray(sigma, dtype=np.float64)
+    if np.any(~(sigma > 0)):
+        raise ValueError("noise standard deviations must be positive")
+    noise = sigma * np.random.default_rng(seed).standard_normal(clean.shape)
+    return (clean + noise).astype(clean.dtype)
+
+
+def synthesis_scene(scene: Scene, truth: Field, table: AbsorptionTable,
+                    rays_per_pixel: int) -> Scene:
+    """The scene that renders synthetic data: ``scene``'s cameras and instrument output grid,
+    the truth's own grid, ``rays_per_pixel`` sub-rays and ``table``'s line-by-line grid.
+
+    Parameters
+    ----------
+    scene : Scene
+        The reconstruction's scene (cameras, resolution in cm⁻¹, output wavenumbers).
+    truth : Field
+        Ground truth on its native grid (m).
+    table : AbsorptionTable
+        Cross-sections on the synthesis' line-by-line grid (cm⁻¹), usually finer than the
+        reconstruction's.
+    rays_per_pixel : int
+        Sub-rays per pixel (a perfect square).
+    """
+    return Scene(truth.grid, scene.rig, table, resolution=scene.resolution,
+                 out_wavenumber=scene.out_wavenumber, dtype=scene.dtype,
+                 rays_per_pixel=rays_per_pixel)
+
+
+def simulate_measurement(synthesis: Scene, truth: Field, noise: dict, seed: int,
+                         provenance: dict | None = None) -> Measurement:
+    """Render the truth through ``synthesis`` and add the configured noise.
+
+    Parameters
+    ----------
+    synthesis : Scene
+        Scene on the truth's grid (see :func:`synthesis_scene`).
+    truth : Field
+        Ground truth on ``synthesis.grid``.
+    noise : dict
+        The configuration's ``[noise]`` (see :func:`noise_sigma`).
+    seed : int
+        Seed of the noise.
+    provenance : dict, optional
+        More to record with the data.
+    """
+    if truth.grid != synthesis.grid:
+        raise ValueError("the truth must be given on the synthesis scene's grid")
+    clean = synthesis.simulate(truth.values)
+    sigma = noise_sigma(noise, clean, synthesis.out_wavenumber)
+    record = {"grid": list(truth.grid.shape), "rays_per_pixel": synthesis.rays_per_pixel,
+              "step_cm-1": synthesis.step, "noise": dict(noise), **(provenance or {})}
+    if sigma is None:
+        return Measurement(clean, np.ones(clean.shape[1]), False, record)
+    record["peak_snr"] = float(np.abs(clean).max() / sigma.max())
+    return Measurement(add_noise(clean, sigma, seed), sigma, True, record)
