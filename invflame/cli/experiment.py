@@ -30,9 +30,12 @@ def add_parser(subparsers) -> None:
 
     simulate = subparsers.add_parser(
         "simulate", help="forward only: spectra and camera images of the ground truth",
-        description="Compute the FTIR spectra of every pixel for the configured ground truth "
-        "and write them (spectra.npz: radiance [W/(m2 sr cm-1)] per ray and output "
-        "wavenumber) with a figure of one spectrum and the band-integrated camera images.")
+        description="Compute the FTIR spectra of every pixel for the configured ground truth, "
+        "as a run measures them (sections [data] and [noise]: by default on the truth's own "
+        "grid with more sub-rays and a finer line-by-line step, plus NESR noise), and write "
+        "them (spectra.npz: radiance and its noise sigma [W/(m2 sr cm-1)] per pixel and "
+        "output wavenumber) with a figure of one spectrum and the band-integrated camera "
+        "images.")
     simulate.add_argument("config", type=Path, help=CONFIG_HELP)
     simulate.add_argument("--out", type=Path, default=Path("results/simulate"),
                           help="output folder (default results/simulate)")
@@ -66,13 +69,14 @@ def simulate_command(args: argparse.Namespace) -> int:
     import matplotlib.pyplot as plt
 
     from invflame.atomic_files import write_npz
-    from invflame.experiments.runner import build_scene, load_truth
+    from invflame.experiments.runner import build_scene, load_truth, measure
 
     cfg = configuration.load(args.config)
     scene = build_scene(cfg)
-    truth = load_truth(cfg, scene.grid)
-    spectra = scene.simulate(truth.values)
-    write_npz(args.out / "spectra.npz", radiance=spectra, out_wavenumber=scene.out_wavenumber)
+    measurement = measure(cfg, scene, load_truth(cfg))
+    spectra = measurement.data
+    write_npz(args.out / "spectra.npz", radiance=spectra, sigma=measurement.sigma,
+              out_wavenumber=scene.out_wavenumber)
     images = scene.to_images(spectra.sum(axis=1) * (scene.out_wavenumber[1]
                                                     - scene.out_wavenumber[0]))
     fig, axes = plt.subplots(1, len(images) + 1, figsize=(4 * (len(images) + 1), 3.6))
@@ -86,7 +90,8 @@ def simulate_command(args: argparse.Namespace) -> int:
     fig.colorbar(shown, ax=axes[1:], label="band radiance [W/(m²·sr)]")
     fig.savefig(args.out / "simulated.png", dpi=130, bbox_inches="tight")
     plt.close(fig)
-    print(f"{spectra.shape[0]} spectra of {spectra.shape[1]} points; wrote "
+    print(f"{spectra.shape[0]} spectra of {spectra.shape[1]} points "
+          f"({'noisy' if measurement.noisy else 'noise-free'}: {measurement.provenance}); wrote "
           f"{args.out / 'spectra.npz'} and {args.out / 'simulated.png'}")
     return 0
 

@@ -6,24 +6,29 @@
 ``summary.json``       metrics (normalized MSE and PSNR per field, time per iteration, memory)
 ``history.csv``        per-iteration loss, data misfit, regularizer, gradient norm, wall time
 ``truth.npz``          ground truth on the reconstruction grid (:class:`invflame.field.Field`)
-``initial.npz``        starting fields
+``initial.npz``        starting fields (for a neural field: the pretrained network's)
 ``reconstruction.npz`` reconstructed fields
-``data.npz``           measured and final simulated spectra, output wavenumbers
+``data.npz``           measured and final simulated spectra, noise σ, output wavenumbers
 ``checkpoint.npz``     solver state every few iterations (``resume=True`` continues from it)
 ``log.txt``            what happened, with timings
 
 All files are written atomically. A finished run (``summary.json`` present) is not redone with
 ``resume=True``; an interrupted one continues from its checkpoint.
 
-**Weighting.** The paper's loss is :math:`\\|H[f] - g\\|^2 + \\lambda \\Phi` with λ = 1e-3 and
-Φ a mean over voxels; we read its data term as NeRF-style training does, the squared norm of
-each pixel's spectrum averaged over the pixels (rays). Solvers minimize the plain sum of
-squares :math:`\\|F(\\theta) - d\\|^2 + \\lambda R\\, \\Phi(\\theta)` over all R rays, which is R
-times that objective (same minimizer; Adam and line searches are invariant to the factor), so
-the problem's λ is ``regularizer.lambda × R``; losses in ``history.csv`` are on this scale.
-(Averaging over every pixel *and* wavenumber instead weighs Φ 30 times more at the default
-2 cm⁻¹ output sampling; on the quick preset that over-smooths: Tikhonov then does worse than no
-regularizer.)
+**Protocol.** By default the data are synthesized without the inverse crime and with FTIR
+noise (:mod:`invflame.experiments.measurement`), the start knows nothing of the truth
+(``init.kind = "band-tomography"``, :mod:`invflame.experiments.data_start`), and the summary
+records which start, data, noise and λ made the result, with the ray coverage.
+
+**Weighting** (``regularizer.scaling``). ``"chi2"`` (default): the objective is
+:math:`\\chi^2(\\theta)/M + \\lambda\\,\\Phi(\\theta)` with the noise-whitened misfit
+:math:`\\chi^2 = \\sum((F(\\theta) - d)/\\sigma)^2` over the :math:`M` measured values (≈ 1 per
+value at the noise level) and :math:`\\Phi` a mean over voxels, so λ keeps its meaning whatever
+the numbers of pixels, wavenumbers or voxels; solvers minimize :math:`M` times it. ``"paper"``:
+the study's reading, kept to reproduce it: the unweighted squared norm of each pixel's spectrum
+averaged over the pixels, :math:`\\frac{1}{R}\\|F(\\theta) - d\\|^2 + \\lambda \\Phi`, i.e. the
+problem's weight is λ·R for R pixels (its meaning then changes with the grid, the pixels and
+the wavenumbers).
 """
 
 from __future__ import annotations
@@ -37,10 +42,16 @@ import operators as op
 import solvers
 from invflame.atomic_files import read_json, write_csv, write_json, write_npz, write_text
 from invflame.experiments import config as configuration
-from invflame.experiments.initialization import add_noise, ambient, noisy_truth
-from invflame.experiments.metrics import hot_volume_ratio, normalized_mse, peak_memory_mb, psnr
+from invflame.experiments.data_start import band_tomography_start
+from invflame.experiments.initialization import ambient, noisy_truth
+from invflame.experiments.measurement import (
+    Measurement,
+    simulate_measurement,
+    synthesis_scene,
+)
+from invflame.experiments.metrics import field_scores, peak_memory_mb, psnr
 from invflame.field import Field
-from invflame.geometry import VoxelGrid, paper_rig
+from invflame.geometry import VoxelGrid, paper_rig, ray_coverage
 from invflame.phantoms import make_phantom
 from invflame.representations.neural import NeuralFieldRepresentation
 from invflame.representations.neural_centres import NeuralCentresRepresentation
@@ -66,17 +77,26 @@ class Log:
             print(line, flush=True)
 
 
-def absorption_table(cfg: dict) -> AbsorptionTable:
-    """The absorption table for the configuration's spectral window (cached on disk)."""
+def absorption_table(cfg: dict, step: float | None = None) -> AbsorptionTable:
+    """The absorption table for the configuration's spectral window (cached on disk).
+
+    Parameters
+    ----------
+    cfg : dict
+        Validated configuration.
+    step : float, optional
+        Line-by-line step in cm⁻¹ (default ``spectrum.step``).
+    """
     spectrum = cfg["spectrum"]
-    n = int(round((spectrum["max"] - spectrum["min"]) / spectrum["step"])) + 1
-    wavenumber = spectrum["min"] + spectrum["step"] * np.arange(n)
+    step = spectrum["step"] if step is None else step
+    n = int(round((spectrum["max"] - spectrum["min"]) / step)) + 1
+    wavenumber = spectrum["min"] + step * np.arange(n)
     return AbsorptionTable.cached(default_linelists(wavenumber), wavenumber=wavenumber,
                                   pressure=spectrum["pressure"])
 
 
 def build_scene(cfg: dict, table: AbsorptionTable | None = None) -> Scene:
-    """The measurement scene of a configuration: grid, rig, table and instrument."""
+    """The reconstruction scene of a configuration: grid, rig, sub-rays, table, instrument."""
     grid = VoxelGrid.poolfire(cfg["truth"]["grid"])
     rig = paper_rig(grid, distance=cfg["rig"]["distance"], n_pixels=cfg["rig"]["pixels"],
                     focal_length=cfg["rig"]["focal_length"])
@@ -84,28 +104,152 @@ def build_scene(cfg: dict, table: AbsorptionTable | None = None) -> Scene:
     instrument = cfg["instrument"]
     out = op.ils.default_output_grid(table.wavenumber, instrument["resolution"])
     out = np.arange(out[0], out[-1] + 1e-9, instrument["sampling"])
-    return Scene(grid, rig, table, resolution=instrument["resolution"], out_wavenumber=out)
+    return Scene(grid, rig, table, resolution=instrument["resolution"], out_wavenumber=out,
+                 rays_per_pixel=cfg["rig"]["rays_per_pixel"])
 
 
-def load_truth(cfg: dict, grid: VoxelGrid) -> Field:
-    """The ground truth named by ``truth.source`` on ``grid``: a phantom name or a .npz file."""
+def load_truth(cfg: dict, grid: VoxelGrid | None = None) -> Field:
+    """The ground truth named by ``truth.source``: a phantom name or a field ``.npz`` file.
+
+    Parameters
+    ----------
+    cfg : dict
+        Validated configuration.
+    grid : VoxelGrid, optional
+        Resample onto this grid; default: the truth's native grid (the pool fire's 60³ cells,
+        the synthetic plume's default 60³ grid, a file's own grid).
+    """
     source = cfg["truth"]["source"]
     if source in ("poolfire", "synthetic"):
-        return make_phantom(source, grid=grid)
-    path = Path(source)
-    if not path.is_file():
-        raise FileNotFoundError(
-            f"truth.source {source!r} is neither 'poolfire', 'synthetic' nor an existing file"
-        )
-    return Field.load(path).resample(grid)
+        field = make_phantom(source)
+    else:
+        path = Path(source)
+        if not path.is_file():
+            raise FileNotFoundError(
+                f"truth.source {source!r} is neither 'poolfire', 'synthetic' nor an existing file"
+            )
+        field = Field.load(path)
+    return field if grid is None or grid == field.grid else field.resample(grid)
 
 
-def initial_fields(cfg: dict, truth: Field) -> np.ndarray:
-    """Starting fields: the paper's noisy truth, or ambient air."""
+def measure(cfg: dict, scene: Scene, truth: Field) -> Measurement:
+    """Synthetic measured spectra of the truth (see :mod:`invflame.experiments.measurement`).
+
+    Parameters
+    ----------
+    cfg : dict
+        Validated configuration (``[data]``, ``[noise]``, ``seed``).
+    scene : Scene
+        The reconstruction's scene.
+    truth : Field
+        Ground truth on its native grid.
+    """
+    data = cfg["data"]
+    if data["inverse_crime"]:
+        synthesis, truth = scene, truth.resample(scene.grid)
+    else:
+        table = absorption_table(cfg, cfg["spectrum"]["step"] / data["step_divisor"])
+        synthesis = synthesis_scene(scene, truth, table, data["rays_per_pixel"])
+    return simulate_measurement(synthesis, truth, cfg["noise"], seed=cfg["seed"] + 1,
+                                provenance={"inverse_crime": data["inverse_crime"],
+                                            "truth": str(cfg["truth"]["source"])})
+
+
+def initial_fields(cfg: dict, truth: Field, scene: Scene, measurement: Measurement) -> np.ndarray:
+    """Starting fields on the reconstruction grid: from the data (band tomography), ambient
+    air, or the paper's noisy truth (``truth`` on the reconstruction grid)."""
     init = cfg["init"]
     if init["kind"] == "ambient":
-        return ambient(truth.grid.shape)
+        return ambient(scene.grid.shape, init["ambient"])
+    if init["kind"] == "band-tomography":
+        return band_tomography_start(scene, measurement.data,
+                                     sigma=measurement.sigma if measurement.noisy else None,
+                                     temperature_rise_st=init["temperature_rise"],
+                                     ambient=init["ambient"]).astype(np.float32)
     return noisy_truth(truth.values, init["noise"], seed=cfg["seed"])
+
+
+def protocol(cfg: dict, measurement: Measurement) -> dict[str, str]:
+    """What made a result, in words: the start, the data, the noise and the weight λ."""
+    init, data, reg = cfg["init"], cfg["data"], cfg["regularizer"]
+    starts = {"band-tomography": "data-driven (band-integrated linear tomography + "
+                                 "Burke-Schumann state relation); knows nothing of the truth",
+              "ambient": "ambient air; knows nothing of the truth",
+              "noisy-truth": f"ground truth + {init['noise']:g} relative Gaussian noise (the "
+                             "paper's protocol: starts from the answer)"}
+    record = measurement.provenance
+    if data["inverse_crime"]:
+        made = "inverse crime: the reconstruction's own grid, sub-rays and line-by-line step"
+    else:
+        made = (f"truth on its {'x'.join(map(str, record['grid']))} grid, "
+                f"{record['rays_per_pixel']} sub-rays/pixel, line-by-line step "
+                f"{record['step_cm-1']:g} cm-1")
+    noise = cfg["noise"]
+    if not measurement.noisy:
+        said = "none (noise-free data)"
+    elif noise["kind"] == "snr":
+        said = f"Gaussian, peak SNR {noise['snr']:g}"
+    else:
+        said = (f"Gaussian, NESR {noise['nesr']} W/(m2 sr cm-1) (peak SNR "
+                f"{record['peak_snr']:.0f})")
+    return {"start": starts[init["kind"]], "data": made, "noise": said,
+            "lambda": f"{reg['lambda']} ({reg['scaling']} scaling)"}
+
+
+def regularizer_weight(cfg: dict, scene: Scene, measurement: Measurement, lam: float) -> float:
+    """The solver's weight of the regularizer for a configured λ (see the module docstring):
+    λ·M under ``"chi2"`` scaling (:func:`solvers.problem_weight`), λ·R (pixels) under
+    ``"paper"``."""
+    if cfg["regularizer"]["scaling"] == "paper":
+        return lam * scene.n_rays
+    return solvers.problem_weight(lam, measurement.n_measurements)
+
+
+def choose_lambda(cfg: dict, representation, measurement: Measurement, x0, out: Path,
+                  log) -> solvers.ParameterChoice:
+    """λ by Morozov's discrepancy principle (:func:`solvers.discrepancy_principle`).
+
+    Every trial solves the configured problem from ``x0`` with the configured solver and
+    stopping rules; the choice and all trials go to ``lambda_choice.json`` and
+    ``l_curve.png`` in ``out``.
+
+    Parameters
+    ----------
+    cfg : dict
+        Validated configuration (``regularizer.lambda_range``, ``regularizer.tau``).
+    representation : VoxelRepresentation, NeuralFieldRepresentation, ...
+        Gives the problem for each λ.
+    measurement : Measurement
+        Data and noise σ.
+    x0 : ndarray
+        Starting parameters of every trial.
+    out : Path
+        Output folder.
+    log : callable
+        Receives one line per trial.
+    """
+    reg, solver = cfg["regularizer"], cfg["solver"]
+    m = measurement.n_measurements
+    per_epoch = representation.iterations_per_epoch
+
+    def solve_at(lam):
+        problem = representation.problem(measurement.data, regularizer=reg["kind"],
+                                         lam=solvers.problem_weight(lam, m), x0=x0,
+                                         sigma=measurement.sigma)
+        result = solvers.solve(problem, solver["name"],
+                               max_iter=solver["iterations"] * per_epoch, seed=cfg["seed"],
+                               **solver["options"])
+        final = problem.evaluate(result.x)
+        log(f"lambda {lam:.4g}: chi2/M {final.misfit / m:.4g}, Phi {final.regularizer:.4g} "
+            f"after {result.iterations} iterations ({result.stop_reason})")
+        return result.x, final.misfit, final.regularizer
+
+    low, high = reg["lambda_range"]
+    choice = solvers.discrepancy_principle(solve_at, m, high, low, tau=reg["tau"], refine=2)
+    write_json(out / "lambda_choice.json", choice.as_dict())
+    solvers.plot_l_curve(choice, out / "l_curve.png")
+    log(choice.message)
+    return choice
 
 
 def make_representation(cfg: dict, scene: Scene):
@@ -131,12 +275,29 @@ def starting_parameters(cfg: dict, representation, start: np.ndarray, progress: 
         progress=progress)
 
 
+def physical_fields(scene: Scene, fields: np.ndarray) -> np.ndarray:
+    """Fields clipped to the physical bounds, mole fractions scaled to sum to at most 1."""
+    lower, upper = physical_bounds(*_t_range(scene))
+    fields = np.clip(fields, lower.reshape(4, 1, 1, 1), upper.reshape(4, 1, 1, 1))
+    fields[1:] /= np.maximum(fields[1:].sum(axis=0), 1.0)  # a network may exceed sum(X) = 1
+    return fields
+
+
+def chi2_per_value(simulated: np.ndarray, measurement: Measurement) -> float:
+    """Noise-weighted misfit per measured value, :math:`\\chi^2/M` (≈ 1 at the noise level;
+    the plain mean squared misfit in (W/(m²·sr·cm⁻¹))² for noise-free data)."""
+    residual = (simulated - measurement.data) / measurement.sigma
+    return float(np.mean(residual.astype(np.float64) ** 2))
+
+
 def _t_range(scene: Scene) -> tuple[float, float]:
     return float(scene.table.temperatures[0]), float(scene.table.temperatures[-1])
 
 
 def run_experiment(cfg: dict, out_dir, resume: bool = False, progress: bool = True,
-                   table: AbsorptionTable | None = None) -> dict:
+                   table: AbsorptionTable | None = None,
+                   measurement: Measurement | None = None,
+                   start: np.ndarray | None = None) -> dict:
     """Run one reconstruction and write its outputs (see the module docstring).
 
     Parameters
@@ -151,6 +312,12 @@ def run_experiment(cfg: dict, out_dir, resume: bool = False, progress: bool = Tr
         Show a progress bar and echo the log.
     table : AbsorptionTable, optional
         Reuse an already loaded table (it must match ``cfg["spectrum"]``).
+    measurement : Measurement, optional
+        Reuse measured data made by :func:`measure` for this configuration (a comparison
+        shares one measurement between its methods).
+    start : ndarray, shape (4, nx, ny, nz), optional
+        Reuse starting fields made by :func:`initial_fields` for this configuration and
+        measurement.
 
     Returns
     -------
@@ -163,74 +330,96 @@ def run_experiment(cfg: dict, out_dir, resume: bool = False, progress: bool = Tr
     if resume and summary_path.is_file():
         return read_json(summary_path)
     if not resume:
-        for stale in (summary_path, checkpoint, out / "log.txt"):
+        for stale in (summary_path, checkpoint, out / "log.txt", out / "lambda_choice.json"):
             stale.unlink(missing_ok=True)
     log = Log(out / "log.txt", echo=progress)
     write_text(out / "config.toml", configuration.dumps(cfg))
 
     scene = build_scene(cfg, table)
-    truth = load_truth(cfg, scene.grid)
-    log(f"scene: grid {scene.grid.shape}, {scene.n_rays} rays, {scene.wavenumber.size} "
-        f"line-by-line points -> {scene.out_wavenumber.size} output points; truth "
-        f"{cfg['truth']['source']}")
-    data = scene.simulate(truth.values)
-    if cfg["noise"]["kind"] == "gaussian":
-        data = add_noise(data, cfg["noise"]["snr"], seed=cfg["seed"] + 1)
-    start = initial_fields(cfg, truth)
-    truth.save(out / "truth.npz")
-    Field(scene.grid, start, {"source": "initial", "init": cfg["init"]}).save(
-        out / "initial.npz")
+    native = load_truth(cfg)
+    truth = native.resample(scene.grid) if native.grid != scene.grid else native
+    log(f"scene: grid {scene.grid.shape}, {scene.n_rays} pixels x {scene.rays_per_pixel} "
+        f"sub-rays, {scene.wavenumber.size} line-by-line points -> "
+        f"{scene.out_wavenumber.size} output points; truth {cfg['truth']['source']}")
+    if measurement is None:
+        measurement = measure(cfg, scene, native)
+    described = protocol(cfg, measurement)
+    log("; ".join(f"{k}: {v}" for k, v in described.items()))
+    coverage = ray_coverage(scene.segments, scene.rig, truth.values[0])
+    if start is None:
+        start = initial_fields(cfg, truth, scene, measurement)
 
     representation = make_representation(cfg, scene)
     x0 = starting_parameters(cfg, representation, start, progress)
-    problem = representation.problem(data, regularizer=cfg["regularizer"]["kind"],
-                                     lam=cfg["regularizer"]["lambda"] * scene.n_rays, x0=x0)
+    start = physical_fields(scene, representation.fields(x0))
+    truth.save(out / "truth.npz")
+    Field(scene.grid, start, {"source": "initial", "init": cfg["init"]}).save(
+        out / "initial.npz")
+    reg = dict(cfg["regularizer"])
+    choice_file = out / "lambda_choice.json"
+    if isinstance(reg["lambda"], str):  # a rule: chosen from the data, once
+        chosen = (read_json(choice_file) if resume and choice_file.is_file() else
+                  choose_lambda(cfg, representation, measurement, x0, out, log).as_dict())
+        reg["lambda"] = float(chosen["lam"])
+        described["lambda"] = (f"{reg['lambda']:.4g} from the discrepancy principle"
+                               + ("" if chosen["reached"] else " (criterion not reached: "
+                                  "smallest misfit tried)"))
+        log(f"regularizer weight: lambda {described['lambda']}")
+    lam = regularizer_weight(cfg, scene, measurement, reg["lambda"])
+    sigma = measurement.sigma if reg["scaling"] == "chi2" else None
+    problem = representation.problem(measurement.data, regularizer=reg["kind"], lam=lam, x0=x0,
+                                     sigma=sigma)
     solver = cfg["solver"]
+    per_epoch = representation.iterations_per_epoch
     callbacks = [solvers.Checkpoint(checkpoint, every=CHECKPOINT_EVERY)]
     if progress:
         callbacks.append(solvers.ProgressBar(desc=out.name))
     resume_from = checkpoint if resume and checkpoint.is_file() else None
-    log(f"solver {solver['name']} for {solver['iterations']} iterations"
+    log(f"solver {solver['name']} for at most {solver['iterations']} epochs"
+        + (f" ({per_epoch} iterations each)" if per_epoch > 1 else "")
         + (f", resuming from {checkpoint.name}" if resume_from else ""))
-    result = solvers.solve(problem, solver["name"], max_iter=solver["iterations"],
+    result = solvers.solve(problem, solver["name"], max_iter=solver["iterations"] * per_epoch,
                            callbacks=callbacks, seed=cfg["seed"], resume=resume_from,
                            **solver["options"])
     log(str(result))
 
-    fields = representation.fields(result.x)
-    lower, upper = physical_bounds(*_t_range(scene))
-    fields = np.clip(fields, lower.reshape(4, 1, 1, 1), upper.reshape(4, 1, 1, 1))
-    fields[1:] /= np.maximum(fields[1:].sum(axis=0), 1.0)  # a network may exceed sum(X) = 1
+    fields = physical_fields(scene, representation.fields(result.x))
     Field(scene.grid, fields,
           {"source": "reconstruction", "config": cfg}).save(out / "reconstruction.npz")
     simulated = scene.simulate(fields)
-    write_npz(out / "data.npz", measured=data, simulated=simulated,
-              out_wavenumber=scene.out_wavenumber)
+    write_npz(out / "data.npz", measured=measurement.data, simulated=simulated,
+              sigma=measurement.sigma, out_wavenumber=scene.out_wavenumber)
     history = result.history.as_dict()
     write_csv(out / "history.csv",
               [dict(zip(history, row, strict=True)) for row in zip(*history.values(),
                                                                    strict=True)])
     times = np.asarray(history["time"])
     seconds = float(np.diff(times).mean()) if times.size > 1 else None
-    batches = (scene.n_rays / cfg["representation"]["rays_per_batch"]
-               if representation.kind == "neural-field" else 1.0)
+    scores, initial = field_scores(truth.values, fields), field_scores(truth.values, start)
     summary = {
         "config": cfg,
+        "protocol": described,
+        "lambda": reg["lambda"],
+        "coverage": coverage,
         "iterations": result.iterations,
+        "epochs": result.iterations / per_epoch,
         "stop_reason": result.stop_reason,
+        "converged": not result.stop_reason.startswith(("max_iter", "time_budget")),
         "loss": {"initial": history["loss"][0], "final": result.loss},
-        "mse": normalized_mse(truth.values, fields),
-        "mse_initial": normalized_mse(truth.values, start),
+        "chi2_per_measurement": {"initial": chi2_per_value(scene.simulate(start), measurement),
+                                 "final": chi2_per_value(simulated, measurement)},
+        **scores,
+        "mse_initial": initial["mse"],
+        "mse_flame_initial": initial["mse_flame"],
+        "hot_volume_ratio_initial": initial["hot_volume_ratio"],
         "psnr_db": psnr(truth.values, fields),
-        # a truth with no flame (a user's cold field) has no hot volume to compare
-        "hot_volume_ratio": (hot_volume_ratio(truth.values, fields)
-                             if np.any(truth.values[0] > 500.0) else None),
         "seconds_per_iteration": seconds,
-        "seconds_per_epoch": None if seconds is None else seconds * batches,
+        "seconds_per_epoch": None if seconds is None else seconds * per_epoch,
         "parameter_memory_mb": representation.parameter_bytes(result.x) / 1e6,
         "peak_memory_mb": peak_memory_mb(),
     }
     write_json(summary_path, summary)
-    log(f"MSE {summary['mse']} (initial {summary['mse_initial']}); "
-        f"{summary['seconds_per_iteration']} s/iteration")
+    log(f"MSE {summary['mse']} (start {summary['mse_initial']}); chi2/M "
+        f"{summary['chi2_per_measurement']['final']:.3g}; {result.iterations} iterations, "
+        f"{'converged' if summary['converged'] else 'not converged'}")
     return summary

@@ -13,7 +13,8 @@ def test_defaults_and_partial_override(tmp_path):
                     'kind = "tv"\n')
     cfg = config.load(path)
     assert cfg["solver"]["name"] == "gd" and cfg["solver"]["options"] == {"max_step": 0.5}
-    assert cfg["regularizer"] == {"kind": "tv", "lambda": 1e-3}
+    assert cfg["regularizer"] == {"kind": "tv", "lambda": 1e-3, "scaling": "chi2",
+                                  "lambda_range": [1e-3, 1e2], "tau": 1.0}
     assert cfg["rig"]["focal_length"] == 0.59
     path.write_text(config.dumps(cfg))
     assert config.load(path) == cfg
@@ -28,6 +29,9 @@ def test_defaults_and_partial_override(tmp_path):
         ("[truth]\ngrid = 'big'\n", r"'truth.grid' must be an integer"),
         ("[spectrum]\nmin = 800.0\n", r"'spectrum.min' must be below"),
         ("[solver\n", r"malformed TOML"),
+        ("[init]\nambient = [300.0, 0.5, 0.6, 0.0]\n", r"'init.ambient' must be"),
+        ("[init]\nambient = [300.0, 0.0]\n", r"'init.ambient' must be a list of 4 numbers"),
+        ("[rig]\nrays_per_pixel = 8\n", r"'rig.rays_per_pixel' must be a perfect square"),
     ],
 )
 def test_errors_name_the_bad_key(tmp_path, text, message):
