@@ -184,6 +184,7 @@ def table_rows(summaries: dict[str, dict]) -> list[dict]:
         start_t = summary["mse_initial"]["T"]
         rows.append({
             **_scores_row(method, summary, "method"),
+            "lambda": summary["lambda"],
             "iterations": summary["iterations"],
             "converged": summary["converged"],
             "chi2_per_measurement": summary["chi2_per_measurement"]["final"],
@@ -208,7 +209,7 @@ def baseline_rows(truth: Field, start: Field, protocol: str, air) -> list[dict]:
     paper's, the start is the truth plus noise, and all three fit no data. ``air``: the
     ambient air, T in K and mole fractions of CO2, H2O, CH4.
     """
-    kind = "start (uses the data)" if protocol == "honest" else "no data (knows the truth)"
+    kind = "uses the data" if protocol == "honest" else "no data; knows the truth"
     fields = {"start": (start.values, kind),
               "start smoothed (σ = 1 voxel)": (smoothed(start.values), kind),
               "ambient air (flat)": (ambient(truth.grid.shape, air), "no data")}
@@ -230,8 +231,9 @@ def markdown_table(rows: list[dict], baselines: list[dict], preset: str, protoco
     lines = [
         f"Preset `{preset}`, protocol `{protocol}`.",
         "",
-        *(f"- {what}: {how}" for what, how in described.items()),
+        *(f"- {what}: {how}" for what, how in described.items() if what != "lambda"),
         "",
+        "λ: the regularizer's weight (on the scale of the run's `regularizer.scaling`). "
         "MSE over voxel centres, each field min–max normalized by the ground truth's range; "
         "MSE_T flame: the same over the voxels above 500 K in the truth or the estimate; hot "
         "vol.: volume above 500 K over the truth's (near 0: the flame was lost); gain: MSE_T "
@@ -239,13 +241,13 @@ def markdown_table(rows: list[dict], baselines: list[dict], preset: str, protoco
         "noise-weighted misfit per measured value (≈ 1 fits to the noise). Paper: Table 1 "
         "(60³, 4 × 32² px, 2000 epochs, GPU, noisy-truth start).",
         "",
-        "| row | iterations | converged | χ²/M | MSE_T | MSE_T flame | MSE_CO2 | MSE_H2O | "
+        "| row | λ | iterations | converged | χ²/M | MSE_T | MSE_T flame | MSE_CO2 | MSE_H2O | "
         "hot vol. | start MSE_T | gain | epoch [ms] | paper MSE_T |",
-        "|---|---:|:-:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "|---|---:|---:|:-:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for r in rows:
         lines.append(
-            f"| {r['method']} | {r['iterations']} | {_cell(r['converged'])} | "
+            f"| {r['method']} | {r['lambda']:g} | {r['iterations']} | {_cell(r['converged'])} | "
             f"{_cell(r['chi2_per_measurement'], '.3g')} | {_cell(r['MSE_T'])} | "
             f"{_cell(r['MSE_T_flame'])} | {_cell(r['MSE_CO2'])} | {_cell(r['MSE_H2O'])} | "
             f"{_cell(r['hot_volume_ratio'], '.2f')} | {_cell(r['MSE_T_initial'])} | "
@@ -253,7 +255,7 @@ def markdown_table(rows: list[dict], baselines: list[dict], preset: str, protoco
             f"{r['paper_MSE_T']:.4f} |")
     for b in baselines:
         lines.append(
-            f"| *{b['method']}* ({b['kind']}) | – | – | – | {_cell(b['MSE_T'])} | "
+            f"| *{b['method']}* ({b['kind']}) | – | – | – | – | {_cell(b['MSE_T'])} | "
             f"{_cell(b['MSE_T_flame'])} | {_cell(b['MSE_CO2'])} | {_cell(b['MSE_H2O'])} | "
             f"{_cell(b['hot_volume_ratio'], '.2f')} | – | – | – | – |")
     return "\n".join(lines) + "\n"
