@@ -18,7 +18,7 @@ def add_parser(subparsers) -> None:
     reproduce = subparsers.add_parser(
         "reproduce", help="the paper's comparison under its protocol (starts from the truth)",
         description="Runs VG/NR, VG/Tikh., VG/TV, NN/NR, NN/Tikh. and NN/TV under the paper's "
-        "protocol (start: ground truth + 20 %% noise; noise-free data from the reconstruction's "
+        "protocol (start: ground truth + 20 % noise; noise-free data from the reconstruction's "
         "own model; lambda = 1e-3 per pixel; fixed epochs) and writes into --out: one folder "
         "per method, the table (table.md, .csv, .json) with no-data baselines and the paper's "
         "Table 1, figures and logs. For what a researcher without the truth can do, see "
@@ -30,8 +30,8 @@ def add_parser(subparsers) -> None:
         description="Runs the six methods of the paper from a start made of the data "
         "(band-integrated tomography + a methane state relation), on data rendered from the "
         "truth on its own grid with 25 sub-rays per pixel and half the line-by-line step, "
-        "with FTIR noise (NESR), each until its objective stops falling; writes the same "
-        "table, baselines and figures as 'reproduce'.")
+        "with FTIR noise (NESR), each until its objective stops falling or the preset's "
+        "iteration limit; writes the same table, baselines and figures as 'reproduce'.")
     _add_common(study, "results/study")
     study.set_defaults(func=run, protocol="honest")
 
