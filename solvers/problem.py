@@ -200,6 +200,11 @@ class Problem:
         if data.size != int(np.prod(forward.dimsd)):
             raise ValueError(f"data has shape {data.shape} but the forward operator "
                              f"{forward.name} predicts shape {forward.dimsd}")
+        if not np.all(np.isfinite(data)):
+            bad = np.argwhere(~np.isfinite(data.reshape(forward.dimsd)))
+            raise ValueError(f"data hold {len(bad)} NaN or infinite values (first at index "
+                             f"{tuple(int(i) for i in bad[0])}); remove or mask them before "
+                             "building the problem")
         self.data = data.reshape(forward.dimsd).astype(self.dtype, copy=False)
         self.regularizer = Regularizer.coerce(regularizer)
         if self.regularizer is not None and self.regularizer.operator.dims != self.dims:

@@ -48,6 +48,9 @@ def test_bad_inputs_give_clear_errors(nonlinear_forward):
         solvers.Problem(forward, np.zeros(7))
     with pytest.raises(ValueError, match="lam must be"):
         solvers.Problem(forward, np.zeros(8), lam=-1)
+    with pytest.raises(ValueError, match=r"data hold 2 NaN or infinite values \(first at index "
+                                         r"\(3,\)\)"):
+        solvers.Problem(forward, np.array([0, 0, 0, np.nan, 0, np.inf, 0, 0.0]))
     with pytest.raises(ValueError, match="kind must be one of generic, voxel"):
         solvers.Problem(forward, np.zeros(8), kind="nerf")
     with pytest.raises(ValueError, match="x0 violates the bounds"):
