@@ -50,7 +50,7 @@ solver and its options, the initialization and the seed. Every section and key h
     [solver]
     name = "adam"
     iterations = 200           # at most; the stopping rules in options may end it sooner
-    options = { learning_rate = 0.01 }
+    options = { lr = 0.01 }
 
     [init]
     kind = "band-tomography"   # from the data; or "ambient", or "noisy-truth" (the paper's)

@@ -324,6 +324,8 @@ def run_experiment(cfg: dict, out_dir, resume: bool = False, progress: bool = Tr
     dict
         The summary (also in ``summary.json``).
     """
+    solver = cfg["solver"]  # a bad solver name or option fails here, before any file is touched
+    solvers.get(solver["name"])(max_iter=solver["iterations"], **solver["options"])
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     summary_path, checkpoint = out / "summary.json", out / "checkpoint.npz"
@@ -369,7 +371,6 @@ def run_experiment(cfg: dict, out_dir, resume: bool = False, progress: bool = Tr
     sigma = measurement.sigma if reg["scaling"] == "chi2" else None
     problem = representation.problem(measurement.data, regularizer=reg["kind"], lam=lam, x0=x0,
                                      sigma=sigma)
-    solver = cfg["solver"]
     per_epoch = representation.iterations_per_epoch
     callbacks = [solvers.Checkpoint(checkpoint, every=CHECKPOINT_EVERY)]
     if progress:

@@ -5,6 +5,7 @@ import json
 import numpy as np
 import pytest
 
+import solvers
 from invflame.experiments import config, reproduce, runner
 from invflame.field import Field
 
@@ -150,3 +151,16 @@ def test_discrepancy_needs_the_noise_weighted_scale():
         config.validate({"regularizer": {"lambda": "discrepancy", "scaling": "paper"}})
     with pytest.raises(config.ConfigError, match="0 < low < high"):
         config.validate({"regularizer": {"lambda_range": [1.0, 0.1]}})
+
+
+def test_a_bad_solver_leaves_a_finished_run_untouched(tmp_path):
+    runner.run_experiment(tiny(), tmp_path, progress=False)
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    bad = tiny(solver={"name": "Adam", "iterations": 2, "options": {}})
+    with pytest.raises(solvers.UnknownSolverError, match="Did you mean 'adam'"):
+        runner.run_experiment(bad, tmp_path, progress=False)
+    with pytest.raises(TypeError, match="has no option 'learning_rate'"):
+        runner.run_experiment(tiny(solver={"name": "adam", "iterations": 2,
+                                           "options": {"learning_rate": 0.1}}),
+                              tmp_path, progress=False)
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
