@@ -344,6 +344,7 @@ def reproduce(preset: str = "quick", out_dir="results", resume: bool = False,
     from invflame.experiments.runner import (
         absorption_table,
         build_scene,
+        check_resumable,
         initial_fields,
         load_truth,
         measure,
@@ -368,6 +369,7 @@ def reproduce(preset: str = "quick", out_dir="results", resume: bool = False,
     for method, cfg in configs.items():
         folder = out / folder_name(method)
         if method not in pending:
+            check_resumable(cfg, folder)
             summaries[method] = read_json(folder / "summary.json")
             continue
         summaries[method] = run(cfg, folder, resume, progress)

@@ -283,6 +283,39 @@ def physical_fields(scene: Scene, fields: np.ndarray) -> np.ndarray:
     return fields
 
 
+def _differences(a: dict, b: dict, where: str = "") -> list[str]:
+    keys = sorted(set(a) | set(b))
+    out = []
+    for key in keys:
+        path = f"{where}.{key}" if where else key
+        if isinstance(a.get(key), dict) and isinstance(b.get(key), dict) and key != "options":
+            out += _differences(a[key], b[key], path)
+        elif a.get(key) != b.get(key):
+            out.append(f"{path}: {a.get(key)!r} there, {b.get(key)!r} now")
+    return out
+
+
+def check_resumable(cfg: dict, folder) -> None:
+    """Refuse to resume a run folder written under another configuration (a larger iteration
+    limit is allowed: it continues the run).
+
+    Raises
+    ------
+    ConfigError
+        Naming every key whose value differs from the folder's ``config.toml``.
+    """
+    saved = Path(folder) / "config.toml"
+    if not saved.is_file():
+        return
+    changed = [d for d in _differences(configuration.load(saved), cfg)
+               if not d.startswith("solver.iterations:")]
+    if changed:
+        raise configuration.ConfigError(
+            f"cannot resume {Path(folder)}: it was run with another configuration ("
+            + "; ".join(changed) + "); resume with the same configuration, or start a new "
+            "folder (or run without --resume to redo it)")
+
+
 def chi2_per_value(simulated: np.ndarray, measurement: Measurement) -> float:
     """Noise-weighted misfit per measured value, :math:`\\chi^2/M` (≈ 1 at the noise level;
     the plain mean squared misfit in (W/(m²·sr·cm⁻¹))² for noise-free data)."""
@@ -329,6 +362,8 @@ def run_experiment(cfg: dict, out_dir, resume: bool = False, progress: bool = Tr
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     summary_path, checkpoint = out / "summary.json", out / "checkpoint.npz"
+    if resume:
+        check_resumable(cfg, out)
     if resume and summary_path.is_file():
         return read_json(summary_path)
     if not resume:

@@ -164,3 +164,12 @@ def test_a_bad_solver_leaves_a_finished_run_untouched(tmp_path):
                                            "options": {"learning_rate": 0.1}}),
                               tmp_path, progress=False)
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+
+
+def test_resume_refuses_another_configuration(tmp_path):
+    runner.run_experiment(tiny(), tmp_path, progress=False)
+    other = tiny(regularizer={"kind": "tv", "lambda": 2.0})
+    with pytest.raises(config.ConfigError, match=r"regularizer.kind: 'none' there, 'tv' now.*"
+                                                 r"regularizer.lambda"):
+        runner.run_experiment(other, tmp_path, resume=True, progress=False)
+    assert runner.run_experiment(tiny(), tmp_path, resume=True, progress=False)["iterations"] == 6
