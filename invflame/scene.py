@@ -253,8 +253,39 @@ class Scene:
         return self._measure(*self._arrays, fields)
 
     def simulate(self, fields) -> np.ndarray:
-        """:meth:`forward` as a NumPy array."""
-        return to_numpy(self.forward(fields))
+        """:meth:`forward` as a NumPy array, for fields checked by :meth:`check_fields`."""
+        return to_numpy(self.forward(self.check_fields(fields)))
+
+    def check_fields(self, fields) -> np.ndarray:
+        """``fields`` as a NumPy array, if it is a physical state the tables cover.
+
+        Raises
+        ------
+        ValueError
+            For a wrong shape, NaN, a temperature outside the absorption table's range (K),
+            a mole fraction outside [0, 1] or mole fractions summing above 1; the message names
+            the field and the offending values.
+        """
+        fields = to_numpy(fields)
+        if fields.shape != self.field_shape:
+            raise ValueError(f"fields must have shape {self.field_shape} (T, then mole fractions "
+                             f"of {', '.join(self.table.species)}), got {fields.shape}")
+        if not np.all(np.isfinite(fields)):
+            raise ValueError(f"fields hold {int(np.sum(~np.isfinite(fields)))} NaN or infinite "
+                             "values")
+        t_min, t_max = float(self.table.temperatures[0]), float(self.table.temperatures[-1])
+        if fields[0].min() < t_min or fields[0].max() > t_max:
+            raise ValueError(f"temperature spans {fields[0].min():g}-{fields[0].max():g} K, "
+                             f"outside the absorption table's {t_min:g}-{t_max:g} K")
+        for name, x in zip(self.table.species, fields[1:], strict=True):
+            if x.min() < 0 or x.max() > 1:
+                raise ValueError(f"mole fraction of {name} spans {x.min():g}-{x.max():g}, "
+                                 "outside [0, 1]")
+        total = fields[1:].sum(axis=0).max()
+        if total > 1 + 1e-6:
+            raise ValueError(f"mole fractions sum to up to {total:g} in a voxel; they must not "
+                             "exceed 1")
+        return fields
 
     def to_images(self, values) -> np.ndarray:
         """Per-ray values ``(n_rays, …)`` as images ``(n_cameras, nv, nu, …)``."""

@@ -78,3 +78,21 @@ def test_sub_rays_cross_the_voxels_that_centre_rays_miss():
     assert ray_coverage(traverse(grid, *rig.rays(9)), rig)["hot"] is None
     with pytest.raises(ValueError, match="grid's shape"):
         ray_coverage(traverse(grid, *rig.rays()), rig, hot[:-1])
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    (lambda f: f.__setitem__((0, 0, 0, 0), 0.0), r"temperature spans 0-.* outside"),
+    (lambda f: f.__setitem__((0, 0, 0, 0), 5000.0), r"temperature spans .*-5000 K"),
+    (lambda f: f.__setitem__((1, 0, 0, 0), -0.5), "mole fraction of CO2 spans -0.5"),
+    (lambda f: f.__setitem__((slice(1, 3), 0, 0, 0), [0.1, 0.95]), "sum to up to 1.05"),
+    (lambda f: f.__setitem__((2, 0, 0, 0), np.nan), "1 NaN or infinite"),
+])
+def test_simulate_refuses_unphysical_fields(change, message):
+    grid = VoxelGrid.cube(3, size=1.0, centre=(0.0, 0.5, 0.0))
+    scene = Scene(grid, paper_rig(grid, n_pixels=2), small_table(), resolution=4.0)
+    fields = smooth_field(grid)
+    change(fields)
+    with pytest.raises(ValueError, match=message):
+        scene.simulate(fields)
+    with pytest.raises(ValueError, match="fields must have shape"):
+        scene.simulate(np.moveaxis(smooth_field(grid), 0, -1))
