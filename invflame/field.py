@@ -117,13 +117,16 @@ class Field:
         return self.T if name == "T" else self.X(name)
 
     def resample(self, grid: VoxelGrid) -> Field:
-        """This field averaged onto ``grid`` (see :func:`resample_values`).
+        """This field averaged onto ``grid`` (see :func:`resample_values`); the field itself when
+        ``grid`` is its own.
 
         Parameters
         ----------
         grid : VoxelGrid
             Target grid; its box must lie inside this field's box.
         """
+        if grid == self.grid:
+            return self
         meta = {**self.metadata, "resampled_from": list(self.grid.shape)}
         return Field(grid, resample_values(self.values, self.grid, grid), meta)
 

@@ -129,7 +129,7 @@ def load_truth(cfg: dict, grid: VoxelGrid | None = None) -> Field:
                 f"truth.source {source!r} is neither 'poolfire', 'synthetic' nor an existing file"
             )
         field = Field.load(path)
-    return field if grid is None or grid == field.grid else field.resample(grid)
+    return field if grid is None else field.resample(grid)
 
 
 def measure(cfg: dict, scene: Scene, truth: Field) -> Measurement:
@@ -374,7 +374,7 @@ def run_experiment(cfg: dict, out_dir, resume: bool = False, progress: bool = Tr
 
     scene = build_scene(cfg, table)
     native = load_truth(cfg)
-    truth = native.resample(scene.grid) if native.grid != scene.grid else native
+    truth = native.resample(scene.grid)
     log(f"scene: grid {scene.grid.shape}, {scene.n_rays} pixels x {scene.rays_per_pixel} "
         f"sub-rays, {scene.wavenumber.size} line-by-line points -> "
         f"{scene.out_wavenumber.size} output points; truth {cfg['truth']['source']}")

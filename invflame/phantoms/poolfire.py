@@ -32,4 +32,4 @@ def poolfire(grid: VoxelGrid | None = None) -> Field:
                 "scripts/make_poolfire.sh"
             )
         field = Field.load(path)
-    return field if grid is None or grid == field.grid else field.resample(grid)
+    return field if grid is None else field.resample(grid)

@@ -105,6 +105,7 @@ def test_resample_general_overlap_and_refinement(grid):
     fine = field.resample(VoxelGrid((-0.5, 0.0, -0.5), (0.5, 1.0, 0.5), (8, 12, 4)))
     np.testing.assert_allclose(fine.values[:, ::2, ::2, ::2], field.values, rtol=1e-6)
     assert fine.metadata["resampled_from"] == [4, 6, 2]
+    assert field.resample(grid) is field  # its own grid: nothing to average
     with pytest.raises(ValueError, match="must lie inside the source box"):
         field.resample(VoxelGrid.cube(4, size=2.0))
 
