@@ -29,6 +29,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from invflame.field import validate_values
 from invflame.geometry import CameraRig, RaySegments, VoxelGrid, paper_rig, traverse
 from invflame.spectroscopy.absorption_table import AbsorptionTable
 from operators import ILSConvolution, Operator, RowMean
@@ -262,29 +263,17 @@ class Scene:
         Raises
         ------
         ValueError
-            For a wrong shape, NaN, a temperature outside the absorption table's range (K),
-            a mole fraction outside [0, 1] or mole fractions summing above 1; the message names
-            the field and the offending values.
+            For what :func:`invflame.field.validate_values` refuses (a wrong shape, NaN, T ≤ 0,
+            a mole fraction outside [0, 1], mole fractions summing above 1) and for a
+            temperature outside the absorption table's range (K); the message names the field
+            and the offending values.
         """
         fields = to_numpy(fields)
-        if fields.shape != self.field_shape:
-            raise ValueError(f"fields must have shape {self.field_shape} (T, then mole fractions "
-                             f"of {', '.join(self.table.species)}), got {fields.shape}")
-        if not np.all(np.isfinite(fields)):
-            raise ValueError(f"fields hold {int(np.sum(~np.isfinite(fields)))} NaN or infinite "
-                             "values")
+        validate_values(fields, self.grid)
         t_min, t_max = float(self.table.temperatures[0]), float(self.table.temperatures[-1])
         if fields[0].min() < t_min or fields[0].max() > t_max:
             raise ValueError(f"temperature spans {fields[0].min():g}-{fields[0].max():g} K, "
                              f"outside the absorption table's {t_min:g}-{t_max:g} K")
-        for name, x in zip(self.table.species, fields[1:], strict=True):
-            if x.min() < 0 or x.max() > 1:
-                raise ValueError(f"mole fraction of {name} spans {x.min():g}-{x.max():g}, "
-                                 "outside [0, 1]")
-        total = fields[1:].sum(axis=0).max()
-        if total > 1 + 1e-6:
-            raise ValueError(f"mole fractions sum to up to {total:g} in a voxel; they must not "
-                             "exceed 1")
         return fields
 
     def to_images(self, values) -> np.ndarray:

@@ -81,11 +81,12 @@ def test_sub_rays_cross_the_voxels_that_centre_rays_miss():
 
 
 @pytest.mark.parametrize(("change", "message"), [
-    (lambda f: f.__setitem__((0, 0, 0, 0), 0.0), r"temperature spans 0-.* outside"),
+    (lambda f: f.__setitem__((0, 0, 0, 0), 0.0), r"temperature must be > 0 K"),
+    (lambda f: f.__setitem__((0, 0, 0, 0), 100.0), r"temperature spans 100-.* outside"),
     (lambda f: f.__setitem__((0, 0, 0, 0), 5000.0), r"temperature spans .*-5000 K"),
-    (lambda f: f.__setitem__((1, 0, 0, 0), -0.5), "mole fraction of CO2 spans -0.5"),
-    (lambda f: f.__setitem__((slice(1, 3), 0, 0, 0), [0.1, 0.95]), "sum to up to 1.05"),
-    (lambda f: f.__setitem__((2, 0, 0, 0), np.nan), "1 NaN or infinite"),
+    (lambda f: f.__setitem__((1, 0, 0, 0), -0.5), r"X_CO2 must lie in \[0, 1\]; got range \[-0.5"),
+    (lambda f: f.__setitem__((slice(1, 3), 0, 0, 0), [0.1, 0.95]), "maximum sum is 1.05"),
+    (lambda f: f.__setitem__((2, 0, 0, 0), np.nan), r"NaN or inf in \['H2O'\] \(1 entries\)"),
 ])
 def test_simulate_refuses_unphysical_fields(change, message):
     grid = VoxelGrid.cube(3, size=1.0, centre=(0.0, 0.5, 0.0))
@@ -94,5 +95,5 @@ def test_simulate_refuses_unphysical_fields(change, message):
     change(fields)
     with pytest.raises(ValueError, match=message):
         scene.simulate(fields)
-    with pytest.raises(ValueError, match="fields must have shape"):
+    with pytest.raises(ValueError, match="field values must have shape"):
         scene.simulate(np.moveaxis(smooth_field(grid), 0, -1))
