@@ -34,6 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from invflame.field import Field
+from invflame.representations.whitening import noise_weights
 from invflame.scene import Scene
 from invflame.spectroscopy.absorption_table import AbsorptionTable
 
@@ -138,9 +139,7 @@ def add_noise(clean: np.ndarray, sigma, seed: int) -> np.ndarray:
     seed : int
         Seed of the noise.
     """
-    sigma = np.asarray(sigma, dtype=np.float64)
-    if np.any(~(sigma > 0)):
-        raise ValueError("noise standard deviations must be positive")
+    sigma = 1.0 / noise_weights(sigma, clean.shape)  # checked: broadcastable, finite, > 0
     noise = sigma * np.random.default_rng(seed).standard_normal(clean.shape)
     return (clean + noise).astype(clean.dtype)
 

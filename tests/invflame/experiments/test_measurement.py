@@ -81,6 +81,8 @@ def test_noise_kinds_give_sigma_per_wavenumber(tmp_path):
         noise_sigma({"kind": "nesr", "nesr": str(table)}, clean, eta), [1.4e-3, 1.8e-3, 2.2e-3])
     noisy = add_noise(np.zeros((20000, 3)), [1.0, 2.0, 3.0], seed=0)
     np.testing.assert_allclose(noisy.std(axis=0), [1.0, 2.0, 3.0], rtol=0.03)
+    with pytest.raises(ValueError, match="finite and positive"):
+        add_noise(np.zeros((2, 3)), [1.0, 0.0, 1.0], seed=0)
 
 
 @pytest.mark.parametrize(("text", "message"), [
