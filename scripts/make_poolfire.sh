@@ -4,8 +4,8 @@
 # Runs the OpenFOAM v1912 fireFoam tutorial combustion/fireFoam/LES/smallPoolFire3D
 # (1 m cube, 60^3 cells, 0.2 m square CH4 inlet at 0.01 m/s, one-step infinitely fast
 # chemistry, fvDOM radiation) to t = END_TIME on NP cores with ASCII output, reconstructs the
-# decomposed case, writes the cell centres and converts that time to the invflame field
-# format (T in K, mole fractions of CO2, H2O, CH4) on the regular 60^3 grid.
+# decomposed case and converts that time to the invflame field format (T in K, mole
+# fractions of CO2, H2O, CH4) on the regular 60^3 grid of the mesh's cells.
 #
 # Needs Debian's openfoam and openfoam-examples packages:
 #     apt-get install -y openfoam openfoam-examples
@@ -45,8 +45,8 @@ fi
 tutorial="${FOAM_TUTORIAL:-/usr/share/doc/openfoam-examples/examples/combustion/fireFoam/LES/smallPoolFire3D}"
 export WM_PROJECT_DIR="${WM_PROJECT_DIR:-/usr/share/openfoam}"
 
-for tool in blockMesh topoSet createPatch decomposePar fireFoam reconstructPar postProcess \
-            foamDictionary mpirun; do
+for tool in blockMesh topoSet createPatch decomposePar fireFoam reconstructPar foamDictionary \
+            mpirun; do
     command -v "$tool" > /dev/null || {
         echo "error: $tool not found; install OpenFOAM: apt-get install -y openfoam openfoam-examples" >&2
         exit 1
@@ -83,7 +83,7 @@ if [ "$convert_only" -eq 0 ]; then
     foamDictionary -entry numberOfSubdomains -set "$nproc" system/decomposeParDict > /dev/null
     foamDictionary -entry coeffs.n -set "(1 $nproc 1)" system/decomposeParDict > /dev/null
 
-    # The tutorial's Allrun, then reconstruction and cell centres.
+    # The tutorial's Allrun, then reconstruction.
     step blockMesh blockMesh
     step topoSet topoSet
     step createPatch createPatch -overwrite
@@ -93,7 +93,6 @@ if [ "$convert_only" -eq 0 ]; then
     if [ "$(id -u)" -eq 0 ]; then mpi_flags=(--allow-run-as-root --oversubscribe); fi
     step fireFoam mpirun "${mpi_flags[@]}" -np "$nproc" fireFoam -parallel
     step reconstructPar reconstructPar -time "$end_time"
-    step writeCellCentres postProcess -func writeCellCentres -time "$end_time"
     echo "[$(date +%T)] simulation done in $((SECONDS - start)) s"
 else
     cd "$workdir"
