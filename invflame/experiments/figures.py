@@ -1,4 +1,5 @@
-"""Figures of a run or a comparison: cutaways, loss curves, spectra and camera images."""
+"""Figures of a run or a comparison: cutaways, error maps, 3-D isotherms, loss curves, spectra
+and camera images."""
 
 from __future__ import annotations
 
@@ -11,8 +12,10 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from invflame.experiments.metrics import normalized_mse  # noqa: E402
 from invflame.field import Field  # noqa: E402
-from invflame.plotting.fields import plot_fields  # noqa: E402
+from invflame.plotting.comparison import plot_comparison, plot_errors  # noqa: E402
+from invflame.plotting.isosurfaces import plot_isotherms_3d  # noqa: E402
 
 
 def read_history(path) -> dict[str, np.ndarray]:
@@ -67,20 +70,63 @@ def spectrum_and_image(folder, path, n_cameras: int = 4) -> Path:
     return Path(path)
 
 
+def run_fields(runs: dict[str, Path]) -> tuple[Field, dict[str, Field]]:
+    """The ground truth and the estimates to show for runs: the start (of the first run), then
+    each run's reconstruction, by label.
+
+    Parameters
+    ----------
+    runs : dict of str to Path
+        Method label → run folder (each holding ``truth.npz`` and ``reconstruction.npz``).
+    """
+    first = Path(next(iter(runs.values())))
+    estimates = {}
+    if (first / "initial.npz").is_file():
+        estimates["start"] = Field.load(first / "initial.npz")
+    estimates.update({label: Field.load(Path(folder) / "reconstruction.npz")
+                      for label, folder in runs.items()})
+    return Field.load(first / "truth.npz"), estimates
+
+
+def field_figures(out, truth: Field, estimates: dict[str, Field]) -> list[Path]:
+    """The figures of fields against the truth, written into ``out``, with the normalized MSE
+    of each estimate (:func:`invflame.experiments.metrics.normalized_mse`) in their titles.
+
+    ``cutaways.png`` (:func:`invflame.plotting.comparison.plot_comparison`: rows truth and
+    estimates, columns T, X_CO2, X_H2O on two mid-planes), ``errors.png``
+    (:func:`~invflame.plotting.comparison.plot_errors`: estimate − truth) and
+    ``isotherms_3d.png`` (:func:`invflame.plotting.isosurfaces.plot_isotherms_3d`: cutaway
+    isotherm surfaces every 100 K from 500 to 1500 K).
+
+    Parameters
+    ----------
+    out : str or Path
+        Output folder.
+    truth : Field
+        Ground truth (T [K], mole fractions [1]).
+    estimates : dict of str to Field
+        Label → fields on the truth's grid, in display order.
+    """
+    out = Path(out)
+    scores = {label: normalized_mse(truth.values, f.values) for label, f in estimates.items()}
+    written = [out / "cutaways.png", out / "errors.png", out / "isotherms_3d.png"]
+    plt.close(plot_comparison(truth, estimates, scores, path=written[0]))
+    plt.close(plot_errors(truth, estimates, scores, path=written[1]))
+    plt.close(plot_isotherms_3d({"ground truth": truth, **estimates}, path=written[2],
+                                scores={k: v.get("T") for k, v in scores.items()}))
+    return written
+
+
 def comparison_figures(out, runs: dict[str, Path]) -> list[Path]:
     """The figures of a comparison, written into ``out``.
 
-    ``cutaways.png`` (ground truth and every reconstruction, isotherms every 100 K from 500 to
-    1500 K), ``loss_curves.png``, and ``spectrum_image.png`` (of the first run).
+    The field figures of :func:`field_figures` (the start of the first run, then every
+    reconstruction, against the ground truth), ``loss_curves.png``, and ``spectrum_image.png``
+    (of the first run).
     """
     out = Path(out)
-    first = next(iter(runs.values()))
-    fields = [Field.load(Path(first) / "truth.npz")]
-    fields += [Field.load(Path(f) / "reconstruction.npz") for f in runs.values()]
-    labels = ["ground truth", *runs]
-    written = [out / "cutaways.png", out / "loss_curves.png", out / "spectrum_image.png"]
-    plot_fields(fields, labels=labels, path=written[0])
-    plt.close("all")
-    loss_curves(runs, written[1])
-    spectrum_and_image(first, written[2])
+    truth, estimates = run_fields(runs)
+    written = field_figures(out, truth, estimates)
+    written += [loss_curves(runs, out / "loss_curves.png"),
+                spectrum_and_image(next(iter(runs.values())), out / "spectrum_image.png")]
     return written

@@ -16,9 +16,13 @@ from invflame.field import FIELD_NAMES, Field  # noqa: E402
 ISOTHERMS = tuple(float(t) for t in range(500, 1600, 100))
 """Default temperature isocontours in K: every 100 K from 500 to 1500 K."""
 
-_LABELS = {"T": "T [K]", "CO2": "X$_{CO_2}$", "H2O": "X$_{H_2O}$", "CH4": "X$_{CH_4}$"}
-_CMAPS = {"T": "inferno", "CO2": "viridis", "H2O": "viridis", "CH4": "cividis"}
-_AXIS_NAMES = "xyz"
+LABELS = {"T": "T [K]", "CO2": "X$_{CO_2}$", "H2O": "X$_{H_2O}$", "CH4": "X$_{CH_4}$"}
+"""Axis label of each field (mole fractions are dimensionless)."""
+
+COLORMAPS = {"T": "inferno", "CO2": "viridis", "H2O": "viridis", "CH4": "cividis"}
+"""Colour map of each field."""
+
+AXIS_NAMES = "xyz"
 
 
 def mid_plane(volume: np.ndarray, normal: int) -> np.ndarray:
@@ -33,14 +37,16 @@ def mid_plane(volume: np.ndarray, normal: int) -> np.ndarray:
     return take.mean(axis=normal)
 
 
-def _vertical_section(volume: np.ndarray, shown: int, normal: int, up: int) -> np.ndarray:
-    """Mid-plane as an image: rows along the up axis, columns along ``shown``."""
+def vertical_section(volume: np.ndarray, shown: int, normal: int, up: int) -> np.ndarray:
+    """Mid-plane of a ``(nx, ny, nz)`` array as an image: rows along the up axis ``up``,
+    columns along the horizontal axis ``shown``, through the centre along ``normal``."""
     plane = mid_plane(volume, normal)  # remaining axes in increasing order
     return plane.T if shown < up else plane
 
 
-def _planes(grid) -> list[tuple[int, int]]:
-    """(horizontal axis shown, normal axis) of the two vertical mid-planes."""
+def vertical_planes(grid) -> list[tuple[int, int]]:
+    """(horizontal axis shown, normal axis) of the two vertical mid-planes of a
+    :class:`~invflame.geometry.VoxelGrid`."""
     horizontal = [a for a in range(3) if a != grid.up_axis]
     return [(horizontal[0], horizontal[1]), (horizontal[1], horizontal[0])]
 
@@ -101,17 +107,17 @@ def plot_fields(
             grid = field.grid
             up = grid.up_axis
             coords = grid.axes()
-            for j, (shown, normal) in enumerate(_planes(grid)):
+            for j, (shown, normal) in enumerate(vertical_planes(grid)):
                 ax = axes[row, 2 * k + j]
-                image = _vertical_section(field[name], shown, normal, up)
+                image = vertical_section(field[name], shown, normal, up)
                 extent = (
                     grid.lower[shown], grid.upper[shown], grid.lower[up], grid.upper[up]
                 )
                 im = ax.imshow(
                     image, origin="lower", extent=extent, vmin=vmin, vmax=vmax,
-                    cmap=_CMAPS[name], interpolation="nearest",
+                    cmap=COLORMAPS[name], interpolation="nearest",
                 )
-                temperature = _vertical_section(field.T, shown, normal, up)
+                temperature = vertical_section(field.T, shown, normal, up)
                 levels = [t for t in isotherms if temperature.min() < t < temperature.max()]
                 if levels:
                     ax.contour(
@@ -123,16 +129,16 @@ def plot_fields(
                 if row == 0:
                     at = grid.centre[normal]
                     ax.set_title(
-                        f"{label}\n{_AXIS_NAMES[shown]}–{_AXIS_NAMES[up]} plane, "
-                        f"{_AXIS_NAMES[normal]} = {at:.2g} m",
+                        f"{label}\n{AXIS_NAMES[shown]}–{AXIS_NAMES[up]} plane, "
+                        f"{AXIS_NAMES[normal]} = {at:.2g} m",
                         fontsize=8,
                     )
                 if row == n_rows - 1:
-                    ax.set_xlabel(f"{_AXIS_NAMES[shown]} [m]", fontsize=8)
+                    ax.set_xlabel(f"{AXIS_NAMES[shown]} [m]", fontsize=8)
                 if k == 0 and j == 0:
-                    ax.set_ylabel(f"{_AXIS_NAMES[up]} [m]", fontsize=8)
+                    ax.set_ylabel(f"{AXIS_NAMES[up]} [m]", fontsize=8)
         cbar = fig.colorbar(im, ax=axes[row, :].tolist(), shrink=0.9, pad=0.01)
-        cbar.set_label(_LABELS[name], fontsize=9)
+        cbar.set_label(LABELS[name], fontsize=9)
         cbar.ax.tick_params(labelsize=7)
     if isotherms:
         fig.suptitle(
