@@ -29,7 +29,7 @@ def measure(dtype, n_rays=4096):
     y = ils(x)
     kernel = np.fft.rfft(np.fft.ifftshift(op.ils.triangular_ils(eta - eta.mean(), 8.0)))
     t_fwd = best_of(lambda: ils(x))
-    t_adj = best_of(lambda: ils.vjp(None, y))
+    t_adj = best_of(lambda: ils.adjoint(y))
     t_fft = best_of(lambda: np.fft.irfft(np.fft.rfft(x, axis=1) * kernel, eta.size, axis=1))
     print(f"{np.dtype(dtype).name}: {n_rays} rays x {eta.size} -> {ils.dimsd[1]} points: "
           f"forward {1e3 * t_fwd:.2f} ms, adjoint {1e3 * t_adj:.2f} ms, "

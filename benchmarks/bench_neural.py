@@ -25,8 +25,7 @@ import time
 import numpy as np
 
 from invflame.phantoms import synthetic_plume
-from invflame.representations.neural import NeuralFieldRepresentation
-from invflame.representations.neural_centres import NeuralCentresRepresentation
+from invflame.representations.neural import NeuralCentresRepresentation, NeuralFieldRepresentation
 from invflame.scene import Scene
 
 PAPER_MS = "479–493 ms"

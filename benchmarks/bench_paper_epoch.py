@@ -35,7 +35,7 @@ def main():
                             str(out)], check=True)
         return
     cfg = reproduce.method_config("paper", args.method)
-    if cfg["representation"]["kind"] == "neural":
+    if cfg["representation"]["kind"] == "neural-field":
         rays = 4 * cfg["rig"]["pixels"] ** 2
         batches = max(1, rays // cfg["representation"]["rays_per_batch"])
     else:

@@ -27,7 +27,7 @@ from timing import best_time
 
 from invflame.phantoms.registry import make_phantom
 from invflame.scene import Scene
-from operators.emission_rte import _ray_order
+from operators.rte_batches import ray_order
 
 
 def exp_only(n_segments, batch_rays: int, n_eta: int):
@@ -65,7 +65,7 @@ def main() -> None:
     gradient = jax.jit(jax.value_and_grad(loss))
     seg, n_eta = scene.segments, scene.wavenumber.size
     elements = seg.n_segments * n_eta
-    _, n_steps = _ray_order(jnp.asarray(seg.length), scene.batch_rays)
+    _, n_steps = ray_order(jnp.asarray(seg.length), scene.batch_rays)
     swept = int(n_steps.sum()) * scene.batch_rays * n_eta
     t_exp = best_time(lambda: exp_only(n_steps, scene.batch_rays, n_eta)(n_steps), args.repeats)
     t_fwd = best_time(lambda: scene.forward(fields), args.repeats)

@@ -26,9 +26,15 @@ if __name__ == "__main__":
     parser.add_argument("--method", default="VG/TV", choices=list(reproduce.METHODS))
     parser.add_argument("--lambdas", type=float, nargs="+", default=[3.0, 10.0, 30.0, 100.0])
     parser.add_argument("--out", type=Path, default=Path("results/lambda_sweep"))
+    parser.add_argument("--resolved", action="store_true",
+                        help="make the data from the truth averaged onto the reconstruction grid "
+                             "(as at the paper's size, where the truth's grid is the "
+                             "reconstruction's): model error of sub-rays and step only")
     args = parser.parse_args()
     cfg = reproduce.method_config("quick", args.method, 0, "honest", args.truth)
     scene, native = runner.build_scene(cfg), runner.load_truth(cfg)
+    if args.resolved:
+        native = native.resample(scene.grid)
     measurement = runner.measure(cfg, scene, native)
     start = runner.initial_fields(cfg, native.resample(scene.grid), scene, measurement)
     m = measurement.n_measurements

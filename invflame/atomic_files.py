@@ -1,8 +1,10 @@
 """Atomic file writing: a half-written file never replaces a good one.
 
 Every file invflame writes (fields, absorption tables, line lists, run outputs) goes through
-:func:`write_atomic`: the content fills a temporary file in the destination folder, which is
-flushed to disk and then renamed over the destination.
+:func:`write_atomic` (:func:`solvers.atomic.write_atomic`, the one writer that solver
+checkpoints use too): the content fills a uniquely named temporary file in the destination
+folder, which is flushed to disk and then renamed over the destination. :func:`read_npz` reads
+an ``.npz`` file back and names the file when it is damaged.
 """
 
 from __future__ import annotations
@@ -10,40 +12,14 @@ from __future__ import annotations
 import csv
 import io
 import json
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from solvers.atomic import CorruptFileError, read_npz, write_atomic
 
-def write_atomic(path, write) -> Path:
-    """Create ``path`` atomically: ``write(binary_stream)`` fills a temporary file in the same
-    folder, which then replaces ``path`` with the permissions the umask gives new files.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        Destination; parent folders are created.
-    write : callable
-        Writes the content to the binary stream it is given.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as handle:
-            write(handle)
-            handle.flush()
-            os.fsync(handle.fileno())
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates the file private (0600)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+__all__ = ["CorruptFileError", "read_json", "read_npz", "write_atomic", "write_csv",
+           "write_json", "write_npz", "write_text"]
 
 
 def write_text(path, text: str) -> Path:
@@ -71,5 +47,16 @@ def write_csv(path, rows: list[dict]) -> Path:
 
 
 def read_json(path):
-    """Read a JSON file written by :func:`write_json`."""
-    return json.loads(Path(path).read_text())
+    """Read a JSON file written by :func:`write_json`.
+
+    Raises
+    ------
+    CorruptFileError
+        If the file is not valid UTF-8 JSON (the message names it).
+    """
+    path = Path(path)
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as err:
+        raise CorruptFileError(f"{path} is damaged or incomplete (not valid JSON: {err}); delete "
+                               "it and write it again") from err

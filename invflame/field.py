@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from invflame.atomic_files import write_npz
+from invflame.atomic_files import read_npz, write_npz
 from invflame.geometry import VoxelGrid
 
 FIELD_NAMES = ("T", "CO2", "H2O", "CH4")
@@ -181,26 +181,28 @@ class Field:
         Raises
         ------
         ValueError
-            If the file lacks an entry, has other field names, or fails validation.
+            If the file lacks an entry, has other field names, or fails validation;
+            :class:`~invflame.atomic_files.CorruptFileError` if it is truncated or not an
+            ``.npz`` (the message names the path).
         """
-        with np.load(path, allow_pickle=False) as data:
-            missing = {"values", "names", "lower", "upper", "shape", "up_axis"} - set(data.files)
-            if missing:
-                raise ValueError(f"{path} is not an invflame field file: missing {sorted(missing)}")
-            names = tuple(str(n) for n in data["names"])
-            if names != FIELD_NAMES:
-                raise ValueError(f"{path} holds fields {names}; expected {FIELD_NAMES}")
-            grid = VoxelGrid(
-                data["lower"],
-                data["upper"],
-                tuple(int(n) for n in data["shape"]),
-                up_axis=int(data["up_axis"]),
-            )
-            meta = json.loads(str(data["metadata"])) if "metadata" in data.files else {}
-            try:
-                return cls(grid, data["values"], meta)
-            except ValueError as err:
-                raise ValueError(f"{path}: {err}") from err
+        data = read_npz(path, "field file", "write it again (rerun what made it)")
+        missing = {"values", "names", "lower", "upper", "shape", "up_axis"} - set(data)
+        if missing:
+            raise ValueError(f"{path} is not an invflame field file: missing {sorted(missing)}")
+        names = tuple(str(n) for n in data["names"])
+        if names != FIELD_NAMES:
+            raise ValueError(f"{path} holds fields {names}; expected {FIELD_NAMES}")
+        grid = VoxelGrid(
+            data["lower"],
+            data["upper"],
+            tuple(int(n) for n in data["shape"]),
+            up_axis=int(data["up_axis"]),
+        )
+        meta = json.loads(str(data["metadata"])) if "metadata" in data else {}
+        try:
+            return cls(grid, data["values"], meta)
+        except ValueError as err:
+            raise ValueError(f"{path}: {err}") from err
 
 
 def hot_extent(field: Field, threshold: float) -> tuple[np.ndarray | None, np.ndarray | None]:
@@ -238,16 +240,16 @@ def _overlap_matrix(src_edges: np.ndarray, dst_edges: np.ndarray) -> np.ndarray:
 
 
 def resample_values(values: np.ndarray, src: VoxelGrid, dst: VoxelGrid) -> np.ndarray:
-    """Average a field array from grid ``src`` onto grid ``dst`` by cell overlap.
+    r"""Average a field array from grid ``src`` onto grid ``dst`` by cell overlap.
 
     Each destination voxel gets the overlap-weighted average of the source voxels it covers,
     weighted by their molar density ``c = p / (R T)`` at uniform pressure:
 
-    .. math::  \\bar T = \\frac{\\sum_i w_i c_i T_i}{\\sum_i w_i c_i}
-               = \\frac{\\sum_i w_i}{\\sum_i w_i / T_i}, \\qquad
-               \\bar X_s = \\frac{\\sum_i w_i c_i X_{s,i}}{\\sum_i w_i c_i},
+    .. math::  \bar T = \frac{\sum_i w_i c_i T_i}{\sum_i w_i c_i}
+               = \frac{\sum_i w_i}{\sum_i w_i / T_i}, \qquad
+               \bar X_s = \frac{\sum_i w_i c_i X_{s,i}}{\sum_i w_i c_i},
 
-    with ``w_i`` the overlap volume. So the destination voxel (at ``p`` and ``\\bar T``) holds the
+    with ``w_i`` the overlap volume. So the destination voxel (at ``p`` and ``\bar T``) holds the
     same moles of gas and of each species as the source voxels: number densities, which set the
     absorption, are conserved. The temperature is the harmonic (molar) mean, a little below
     the volume mean where the temperature varies within a voxel. For integer coarsening

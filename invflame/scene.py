@@ -10,33 +10,59 @@ builds, in one call, the voxel forward map
 
 fields (T in K, mole fractions of CO2, H2O, CH4) to measured spectra in W/(m²·sr·cm⁻¹), one
 per camera pixel (a "ray" of the data is a pixel; it is the mean of ``rays_per_pixel``
-sub-rays spread over the pixel, :class:`operators.RowMean`), both
-as a composed :class:`operators.Operator` (:attr:`Scene.operator`: jvp, vjp, Jacobian, dot
-and Taylor tests) and as one jitted JAX function (:meth:`Scene.forward`, differentiable with
-``jax.vjp``/``jax.grad`` through the kernel's custom VJP), which give the same numbers.
+sub-rays spread over the pixel). The map is one JAX function around the emission kernel
+(gather onto the segments, kernel, mean over sub-rays, lineshape), and everything evaluates
+that one function: :meth:`Scene.forward` (jitted, differentiable with ``jax.vjp``/``jax.grad``
+through the kernel's custom VJP), :meth:`Scene.simulate` (the fields checked, then
+:meth:`~Scene.forward`) and :attr:`Scene.operator`, the same function as an
+:class:`operators.Operator` (:class:`operators.emission_rte.KernelOperator`: jvp, vjp,
+Jacobian, dot and Taylor tests). The pieces stay available as operators of their own
+(:attr:`Scene.sampling`, :attr:`Scene.emission`, :attr:`Scene.ils`) on the same tables.
 
-With ``devices`` given, :meth:`Scene.forward` splits the rays over several devices
+With a ``background`` (:mod:`invflame.background`: a black-body wall or measured spectra per
+camera), every sub-ray of a camera ends on that camera's background, which the kernel adds
+through the ray's transmittance, :math:`I = I_\text{flame} + \tau_\text{ray} I_\text{bg}`;
+without one (the default) the numbers are those of a flame against a cold, black background.
+
+With ``devices`` given, the map splits the rays over several devices
 (:func:`operators.sharding.shard_rays`): the fields stay replicated, each device measures its
 block of rays, and gradients are summed over the devices; the numbers agree with the
-one-device map to round-off. :attr:`Scene.operator` always runs on one device.
+one-device map to round-off. :meth:`Scene.forward` and :attr:`Scene.operator` both run so.
 """
 
 from __future__ import annotations
 
+import copy
 from functools import cached_property, partial
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from invflame.background import Background
+from invflame.errors import GeometryError
 from invflame.field import validate_values
 from invflame.geometry import CameraRig, RaySegments, VoxelGrid, paper_rig, traverse
 from invflame.spectroscopy.absorption_table import AbsorptionTable
-from operators import ILSConvolution, Operator, RowMean
-from operators.emission_rte import EmissionRTE, RTETables, batch_rays_for, emission_radiance
+from operators import ILSConvolution
+from operators.base import precision
+from operators.emission_rte import EmissionRTE, KernelOperator, RTETables, batch_rays_for
 from operators.interop import to_jax, to_numpy
+from operators.rte_tables import rayleigh_soot_constant
 from operators.sampling import VoxelSampling, sample_voxels
 from operators.sharding import place_rays, ray_mesh, replicate, shard_rays
+
+
+def _checked_soot(soot, grid: VoxelGrid) -> np.ndarray:
+    """A soot volume fraction field as float64, if its shape and values are usable."""
+    soot = np.asarray(soot, np.float64)
+    if soot.shape != grid.shape:
+        raise ValueError(f"soot must be a volume fraction per voxel of shape {grid.shape}, got "
+                         f"{soot.shape}")
+    if not (np.all(np.isfinite(soot)) and soot.min() >= 0 and soot.max() < 1):
+        raise ValueError(f"soot volume fractions must be finite and in [0, 1), got "
+                         f"{np.nanmin(soot):g} to {np.nanmax(soot):g}")
+    return soot
 
 
 def _window_slice(wavenumber: np.ndarray, window) -> slice:
@@ -52,14 +78,23 @@ def _window_slice(wavenumber: np.ndarray, window) -> slice:
     return slice(int(inside[0]), int(inside[-1]) + 1)
 
 
-def _measure(batch_rays, rays_per_pixel, tables, voxel, lengths, ils, fields):
-    radiance = emission_radiance(tables, sample_voxels(fields, voxel), lengths, batch_rays)
+def _measure(radiance, rays_per_pixel, tables, voxel, lengths, camera, ils, shared, fields):
+    """Pixel spectra ``(n_pixels, n_out)`` of voxel fields, ``radiance`` the emission kernel.
+
+    ``camera`` (the camera of each sub-ray, or None) picks each sub-ray's background from
+    ``shared["background"]`` ``(n_cameras, n_eta)``; ``shared["soot"]`` ``(nx, ny, nz)``, when
+    there, is appended to the fields as the soot volume fraction.
+    """
+    if "soot" in shared:
+        fields = jnp.concatenate([fields, shared["soot"][None]])
+    background = None if camera is None else shared["background"][camera]
+    radiance = radiance(tables, sample_voxels(fields, voxel), lengths, background)
     pixels = radiance.reshape(-1, rays_per_pixel, radiance.shape[-1]).mean(axis=1)
     return jnp.matmul(pixels, ils.T, precision=jax.lax.Precision.HIGHEST)
 
 
 class Scene:
-    """Grid, cameras, spectroscopy and instrument of a flame-emission measurement.
+    r"""Grid, cameras, spectroscopy and instrument of a flame-emission measurement.
 
     Parameters
     ----------
@@ -71,7 +106,7 @@ class Scene:
         Cross-sections of (CO2, H2O, CH4) on the line-by-line grid (cm⁻¹) at one pressure
         (Pa); its grid step is the line-by-line step.
     resolution : float, optional
-        FTIR resolution :math:`1/\\mathrm{MOPD}` in cm⁻¹ (default 8), see
+        FTIR resolution :math:`1/\mathrm{MOPD}` in cm⁻¹ (default 8), see
         :mod:`operators.ils`.
     out_wavenumber : array_like, optional
         Output grid in cm⁻¹ (default :func:`operators.ils.default_output_grid`).
@@ -94,6 +129,17 @@ class Scene:
         1; :meth:`paper` and configurations use 9). A pixel's spectrum is the mean of its
         sub-rays'; one ray per pixel leaves voxels between the pixels' centre rays unseen
         (:func:`invflame.geometry.ray_coverage`).
+    background : invflame.background.Background, optional
+        What the cameras see behind the flame (a black-body wall, measured spectra per
+        camera); default None, no background.
+    soot : array_like, shape ``grid.shape``, optional
+        A known soot volume fraction per voxel (dimensionless, in [0, 1)), absorbing and
+        emitting the Rayleigh continuum :math:`C f_v \eta` beside the gas
+        (:mod:`operators.rte_tables`); default None, no soot. It is held fixed: the map's
+        input stays (T, mole fractions).
+    soot_constant : float, optional
+        The Rayleigh constant :math:`C` of the soot
+        (default :func:`operators.rte_tables.rayleigh_soot_constant`).
 
     Attributes
     ----------
@@ -104,14 +150,25 @@ class Scene:
         Line-by-line grid in cm⁻¹.
     out_wavenumber : ndarray, shape (n_out,)
         Instrument output grid in cm⁻¹.
+    tables : operators.emission_rte.RTETables
+        The emission kernel's tables, prepared once for all of the scene's maps.
+    operator : operators.emission_rte.KernelOperator
+        The voxel forward map ``field_shape → data_shape`` as an operator: the function of
+        :meth:`forward`, with its jvp, vjp and Jacobian.
     mesh : jax.sharding.Mesh or None
-        Devices the rays of :meth:`forward` are split over (``None``: not sharded).
+        Devices the rays are split over (``None``: not sharded).
+    background : invflame.background.Background or None
+        The background behind the flame.
+    soot : ndarray, shape ``grid.shape``, or None
+        The known soot volume fraction.
     """
 
     def __init__(self, grid: VoxelGrid, rig: CameraRig, table: AbsorptionTable,
                  resolution: float = 8.0, out_wavenumber=None, window=None,
                  dtype=np.float32, planck: str = "table", memory_budget: int | None = None,
-                 batch_rays: int | None = None, devices=None, rays_per_pixel: int = 1):
+                 batch_rays: int | None = None, devices=None, rays_per_pixel: int = 1,
+                 background: Background | None = None, soot=None,
+                 soot_constant: float | None = None):
         if not isinstance(grid, VoxelGrid):
             raise TypeError(f"grid must be an invflame.geometry.VoxelGrid, got {type(grid)}")
         if not isinstance(rig, CameraRig):
@@ -120,43 +177,120 @@ class Scene:
         self.dtype = np.dtype(dtype)
         self.planck = planck
         self.memory_budget = memory_budget
-        band = _window_slice(table.wavenumber, window)
-        self.wavenumber = table.wavenumber[band]
-        self._coef = table.spline.coef[..., band]
+        self._band = _window_slice(table.wavenumber, window)
+        self.wavenumber = table.wavenumber[self._band]
         self.rays_per_pixel = int(rays_per_pixel)
         self.segments: RaySegments = traverse(grid, *rig.rays(rays_per_pixel))
+        if not self.segments.hit.any():
+            raise GeometryError(
+                f"no ray of the {rig.n_cameras} camera(s) crosses the grid {grid.lower.tolist()}"
+                f"-{grid.upper.tolist()} m: point the cameras at the grid (look_at its centre) "
+                "or widen their sensors")
         self.ils = ILSConvolution(self.wavenumber, self.n_rays, resolution, out_wavenumber,
                                   dtype=self.dtype)
         self.out_wavenumber = self.ils.out_wavenumber
-        self.tables = RTETables.from_spline(self.wavenumber, table.temperatures, self._coef,
-                                            table.pressure, self.dtype, planck)
+        self.soot = None if soot is None else _checked_soot(soot, grid)
+        self.tables = self._tables(soot_constant)
         self.mesh = None if devices is None else ray_mesh(devices)
         n_traced = self.segments.n_rays
         rays_per_device = n_traced if self.mesh is None else -(-n_traced
                                                                // self.mesh.devices.size)
         self.batch_rays = int(batch_rays or batch_rays_for(self.tables, rays_per_device,
                                                            memory_budget))
-        measure = partial(_measure, self.batch_rays, self.rays_per_pixel)
-        rays = (self.segments.voxel, self.segments.length.astype(self.dtype))
-        ils_matrix = np.asarray(self.ils.matrix, self.dtype)
+        if background is not None and not isinstance(background, Background):
+            raise TypeError(f"background must be an invflame.background.Background (e.g. "
+                            f"BlackbodyWall(T, emissivity)), got {type(background).__name__}")
+        self.background = background
+        self.operator = self._operator()
+
+    def _tables(self, soot_constant: float | None) -> RTETables:
+        """The kernel's tables on the scene's window, with a soot row when it has soot."""
+        if self.soot is not None and soot_constant is None:
+            soot_constant = rayleigh_soot_constant()
+        return RTETables.from_spline(self.wavenumber, self.table.temperatures,
+                                     self.table.spline.coef[..., self._band], self.table.pressure,
+                                     self.dtype, self.planck,
+                                     soot=None if self.soot is None else soot_constant)
+
+    def _operator(self) -> KernelOperator:
+        """The forward map on the scene's rays, tables, instrument and background."""
+        camera = None if self.background is None else self._sub_ray_camera()
+        rays = [self.segments.voxel, self.segments.length.astype(self.dtype), camera]
+        shared = {}
+        if self.background is not None:
+            shared["background"] = self.background.on_grid(self.wavenumber, self.rig.n_cameras
+                                                           ).astype(self.dtype)
+        if self.soot is not None:
+            shared["soot"] = self.soot.astype(self.dtype)
+        constants = [np.asarray(self.ils.matrix, self.dtype), shared]
+        with precision(self.dtype):
+            if self.mesh is None:
+                arrays = (self.tables, *jax.tree_util.tree_map(jnp.asarray, rays + constants))
+            else:  # constants cut and placed once: rays split, tables and instrument replicated
+                # whole pixels per device: pad with copies of the last sub-ray (outputs dropped)
+                pad = self.rays_per_pixel * (-self.n_rays % self.mesh.devices.size)
+                rays = jax.tree_util.tree_map(
+                    lambda a: np.pad(a, [(0, pad)] + [(0, 0)] * (a.ndim - 1), mode="edge"), rays)
+                arrays = (replicate(self.tables, self.mesh), *place_rays(rays, 0, self.mesh),
+                          *replicate(constants, self.mesh))
+        return KernelOperator(self._measurement, arrays, self.batch_rays, self.field_shape,
+                              self.data_shape, self.dtype, "Scene")
+
+    def _sub_ray_camera(self) -> np.ndarray:
+        """The camera (index in the rig) of every traced sub-ray, ``(n_rays · rays_per_pixel,)``."""
+        sub_rays = np.diff(self.rig.ray_offsets) * self.rays_per_pixel
+        return np.repeat(np.arange(self.rig.n_cameras), sub_rays)
+
+    def with_background(self, background: Background | None) -> Scene:
+        """The same scene (rays, tables, instrument, devices) in front of another background.
+
+        Parameters
+        ----------
+        background : invflame.background.Background or None
+            The new background (None: none).
+        """
+        if background is not None and not isinstance(background, Background):
+            raise TypeError(f"background must be an invflame.background.Background, got "
+                            f"{type(background).__name__}")
+        scene = copy.copy(self)
+        scene.__dict__.pop("emission", None)
+        scene.background = background
+        scene.operator = scene._operator()
+        return scene
+
+    def with_soot(self, soot, soot_constant: float | None = None) -> Scene:
+        """The same scene (rays, instrument, background, devices) with another known soot
+        field.
+
+        Parameters
+        ----------
+        soot : array_like, shape ``grid.shape``, or None
+            Soot volume fraction per voxel (dimensionless, in [0, 1)); None: no soot.
+        soot_constant : float, optional
+            As for :class:`Scene`.
+        """
+        scene = copy.copy(self)
+        scene.__dict__.pop("emission", None)
+        scene.soot = None if soot is None else _checked_soot(soot, self.grid)
+        scene.tables = scene._tables(soot_constant)
+        scene.operator = scene._operator()
+        return scene
+
+    def _measurement(self, radiance):
+        """The map ``(tables, voxel, lengths, camera, ils, shared, fields) -> spectra`` on the
+        kernel ``radiance`` (:func:`_measure`), split over :attr:`mesh` when there is one."""
+        measure = partial(_measure, radiance, self.rays_per_pixel)
         if self.mesh is None:
-            self._arrays = (self.tables, *(jnp.asarray(a) for a in rays),
-                            jnp.asarray(ils_matrix))
-            self._measure = jax.jit(measure)
-        else:  # constants cut and placed once: rays split, tables and instrument replicated
-            # whole pixels per device: pad with copies of the last sub-ray (outputs dropped)
-            pad = self.rays_per_pixel * (-self.n_rays % self.mesh.devices.size)
-            rays = tuple(np.pad(a, [(0, pad), (0, 0)], mode="edge") for a in rays)
-            self._arrays = (replicate(self.tables, self.mesh), *place_rays(rays, 0, self.mesh),
-                            replicate(ils_matrix, self.mesh))
-            sharded = shard_rays(measure, ray_axes=(None, 0, 0, None, None), devices=self.mesh)
-            self._measure = jax.jit(lambda *args: sharded(*args)[:self.n_rays])
+            return measure
+        sharded = shard_rays(measure, ray_axes=(None, 0, 0, 0, None, None, None),
+                             devices=self.mesh)
+        return lambda *args: sharded(*args)[:self.n_rays]
 
     @classmethod
     def paper(cls, n_cells: int = 60, n_pixels: int = 32, table: AbsorptionTable | None = None,
               rays_per_pixel: int = 9, **kwargs) -> Scene:
-        """The study's configuration: 1 m cube of ``n_cells``³ voxels (y up), four cameras of
-        ``n_pixels``² pixels at 1.5 m, 650–725 cm⁻¹ at 0.04 cm⁻¹, 8 cm⁻¹ resolution.
+        """The study's configuration: 1 m cube of ``n_cells**3`` voxels (y up), four cameras
+        of ``n_pixels**2`` pixels at 1.5 m, 650–725 cm⁻¹ at 0.04 cm⁻¹, 8 cm⁻¹ resolution.
 
         Parameters
         ----------
@@ -216,24 +350,15 @@ class Scene:
 
     @cached_property
     def emission(self) -> EmissionRTE:
-        """Fields on the ray segments → line-by-line radiance ``(n_rays, n_eta)``."""
-        return EmissionRTE(self.wavenumber, self.table.temperatures, self._coef,
-                           self.segments.length, self.pressure, self.dtype, self.planck,
-                           batch_rays=self.batch_rays)
-
-    @cached_property
-    def pixel_mean(self) -> RowMean:
-        """Sub-ray spectra ``(n_rays · rays_per_pixel, n_eta)`` → pixel spectra ``(n_rays,
-        n_eta)``."""
-        return RowMean(self.n_rays, self.rays_per_pixel, self.wavenumber.size, dtype=self.dtype)
-
-    @cached_property
-    def operator(self) -> Operator:
-        """``ILSConvolution @ RowMean @ EmissionRTE @ VoxelSampling``: ``field_shape →
-        data_shape`` (the mean over sub-rays is left out with one ray per pixel)."""
-        if self.rays_per_pixel == 1:
-            return self.ils @ self.emission @ self.sampling
-        return self.ils @ self.pixel_mean @ self.emission @ self.sampling
+        """Fields on the ray segments → line-by-line radiance ``(n_rays · rays_per_pixel,
+        n_eta)``, on the scene's tables, in front of its background (with soot, its input
+        has the soot volume fraction as a fifth field)."""
+        background = None
+        if self.background is not None:
+            per_camera = self.background.on_grid(self.wavenumber, self.rig.n_cameras)
+            background = per_camera[self._sub_ray_camera()]
+        return EmissionRTE.from_tables(self.tables, self.segments.length,
+                                       batch_rays=self.batch_rays, background=background)
 
     def forward(self, fields):
         """Measured spectra ``(n_rays, n_out)`` in W/(m²·sr·cm⁻¹), one jitted JAX call.
@@ -246,16 +371,21 @@ class Scene:
         Returns
         -------
         jax.Array
-            Differentiable with :func:`jax.vjp`/:func:`jax.grad` (reverse mode).
+            Differentiable with :func:`jax.vjp`/:func:`jax.grad` (reverse mode). A float64
+            scene computes in float64 where JAX's 64-bit mode is on (inside
+            :func:`operators.base.precision`, or with ``jax_enable_x64``).
         """
         fields = to_jax(fields, dtype=self.dtype)
         if fields.shape != self.field_shape:
             raise ValueError(f"fields must have shape {self.field_shape}, got {fields.shape}")
-        return self._measure(*self._arrays, fields)
+        return self.operator.function(*self.operator.args, fields)
 
     def simulate(self, fields) -> np.ndarray:
-        """:meth:`forward` as a NumPy array, for fields checked by :meth:`check_fields`."""
-        return to_numpy(self.forward(self.check_fields(fields)))
+        """:meth:`forward` as a NumPy array, for fields checked by :meth:`check_fields`, in the
+        scene's dtype (float64 inside :func:`operators.base.precision`)."""
+        fields = self.check_fields(fields)
+        with precision(self.dtype):
+            return to_numpy(self.forward(fields))
 
     def check_fields(self, fields) -> np.ndarray:
         """``fields`` as a NumPy array, if it is a physical state the tables cover.

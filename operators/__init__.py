@@ -1,38 +1,39 @@
 """Matrix-free operators with derivatives, pylops-compatible when linear.
 
-Domain-agnostic: this package imports neither :mod:`solvers` nor :mod:`invflame`.
-Importing it enables float64 in JAX (``jax_enable_x64``) so that derivative and adjoint checks
-can run in double precision; arrays keep the dtype they are given.
+Domain-agnostic: this package imports neither :mod:`solvers` nor :mod:`invflame`. Importing
+it changes nothing in the process: it does not import torch (only building a
+:class:`TorchOperator` or importing the torch-specific modules does) and does not turn on JAX's
+64-bit mode; an operator of dtype float64 computes in float64 inside :func:`precision` only.
 """
 
-import jax
-
-jax.config.update("jax_enable_x64", True)
-
-from operators.averaging import RowMean  # noqa: E402
-from operators.base import (  # noqa: E402
+from operators.averaging import RowMean
+from operators.base import (
+    Identity,
     Jacobian,
+    JaxOperator,
     LinearOperator,
     Operator,
+    TorchOperator,
     aslinearoperator,
     block_diag,
+    precision,
     vstack,
 )
-from operators.checks import (  # noqa: E402
+from operators.checks import (
     dottest,
     gradient_taylor_test,
     jacobian_dottest,
     taylor_test,
 )
-from operators.derivatives import D_x, D_y, D_z, Gradient, derivative  # noqa: E402
-from operators.diagonal import Diagonal  # noqa: E402
-from operators.emission_rte import (  # noqa: E402
+from operators.derivatives import D_x, D_y, D_z, Gradient, derivative
+from operators.diagonal import Diagonal
+from operators.emission_rte import (
     EmissionRTE,
     RTETables,
     emission_radiance,
     emission_radiance_jvp,
 )
-from operators.functionals import (  # noqa: E402
+from operators.functionals import (
     L1,
     Composite,
     Functional,
@@ -40,12 +41,11 @@ from operators.functionals import (  # noqa: E402
     tikhonov,
     total_variation,
 )
-from operators.ils import ILSConvolution  # noqa: E402
-from operators.jax_operator import JaxOperator  # noqa: E402
-from operators.planck import planck  # noqa: E402
-from operators.sampling import VoxelSampling, sample_voxels  # noqa: E402
-from operators.tabulated import PiecewiseCubic  # noqa: E402
-from operators.torch_operator import TorchOperator  # noqa: E402
+from operators.ils import ILSConvolution
+from operators.norm import operator_norm
+from operators.planck import planck
+from operators.sampling import VoxelSampling, sample_voxels
+from operators.tabulated import PiecewiseCubic
 
 __all__ = [
     "Composite",
@@ -57,6 +57,7 @@ __all__ = [
     "Functional",
     "Gradient",
     "ILSConvolution",
+    "Identity",
     "Jacobian",
     "JaxOperator",
     "L1",
@@ -76,7 +77,9 @@ __all__ = [
     "emission_radiance_jvp",
     "gradient_taylor_test",
     "jacobian_dottest",
+    "operator_norm",
     "planck",
+    "precision",
     "sample_voxels",
     "taylor_test",
     "tikhonov",

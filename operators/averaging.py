@@ -41,12 +41,11 @@ class RowMean(LinearOperator):
         super().__init__((int(n_groups) * self.group, int(n_cols)), (int(n_groups), int(n_cols)),
                          dtype=dtype, name="RowMean")
 
-    def _matvec(self, x):
+    def _forward(self, x):
         n_groups, n_cols = self.dimsd
-        return x.reshape(n_groups, self.group, n_cols).mean(axis=1).ravel()
+        return x.reshape(n_groups, self.group, n_cols).mean(axis=1)
 
-    def _rmatvec(self, y):
+    def _adjoint(self, y):
         n_groups, n_cols = self.dimsd
-        spread = np.broadcast_to(y.reshape(n_groups, 1, n_cols) / self.group,
-                                 (n_groups, self.group, n_cols))
-        return spread.ravel()
+        spread = np.broadcast_to(y[:, None, :] / self.group, (n_groups, self.group, n_cols))
+        return spread.reshape(self.dims)

@@ -36,16 +36,16 @@ def _random(shape, dtype, rng):
 
 @dataclass
 class DotTestResult:
-    """Outcome of a dot-product test :math:`\\langle Ax, y\\rangle = \\langle x, A^H y\\rangle`.
+    r"""Outcome of a dot-product test :math:`\langle Ax, y\rangle = \langle x, A^H y\rangle`.
 
     Attributes
     ----------
     forward : float
-        :math:`\\langle A x, y \\rangle`.
+        :math:`\langle A x, y \rangle`.
     adjoint : float
-        :math:`\\langle x, A^H y \\rangle`.
+        :math:`\langle x, A^H y \rangle`.
     relative_error : float
-        :math:`|a - b| / \\max(|a|, |b|)`.
+        :math:`|a - b| / \max(|a|, |b|)`.
     rtol : float
         Tolerance used for ``passed``.
     """
@@ -80,7 +80,7 @@ def dottest(op, rtol: float = 1e-10, seed=0) -> DotTestResult:
     Parameters
     ----------
     op : operators.LinearOperator
-        Operator with ``op(x)`` and ``op.vjp(None, y)`` (the adjoint).
+        Operator with ``op(x)`` and its adjoint ``op.adjoint(y)``.
     rtol : float, optional
         Relative tolerance for ``passed`` (default 1e-10, for float64).
     seed : int or numpy.random.Generator, optional
@@ -89,7 +89,7 @@ def dottest(op, rtol: float = 1e-10, seed=0) -> DotTestResult:
     rng = _rng(seed)
     x = _random(op.dims, op.dtype, rng)
     y = _random(op.dimsd, op.dtype, rng)
-    return _dot_result(op.name, np.vdot(op(x), y), np.vdot(x, op.vjp(None, y)), rtol)
+    return _dot_result(op.name, np.vdot(op(x), y), np.vdot(x, op.adjoint(y)), rtol)
 
 
 def jacobian_dottest(op: Operator, x, rtol: float = 1e-10, seed=0) -> DotTestResult:
@@ -238,10 +238,10 @@ def taylor_test(op: Operator, x, v=None, h0: float | None = None, n_steps: int =
 
 def gradient_taylor_test(fun, grad, x, v=None, h0: float | None = None, n_steps: int = 14,
                          tol: float = 0.25, seed=0) -> TaylorResult:
-    """Taylor test of a scalar objective against its gradient.
+    r"""Taylor test of a scalar objective against its gradient.
 
-    Remainders are :math:`|f(x+hv) - f(x)|` and :math:`|f(x+hv) - f(x) - h\\langle \\nabla f,
-    v\\rangle|`.
+    Remainders are :math:`|f(x+hv) - f(x)|` and :math:`|f(x+hv) - f(x) - h\langle \nabla f,
+    v\rangle|`.
 
     Parameters
     ----------

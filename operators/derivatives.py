@@ -12,9 +12,9 @@ The operators wrap :class:`pylops.FirstDerivative` (``kind="forward"``), whose a
 from __future__ import annotations
 
 import numpy as np
-import pylops
 
 from operators.base import LinearOperator, aslinearoperator, vstack
+from operators.pylops_import import pylops
 
 _AXES = {"x": 1, "y": 2, "z": 3}
 

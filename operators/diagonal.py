@@ -8,7 +8,7 @@ from operators.base import LinearOperator
 
 
 class Diagonal(LinearOperator):
-    """:math:`x \\mapsto d \\odot x` for a fixed real array :math:`d` (self-adjoint).
+    r""":math:`x \mapsto d \odot x` for a fixed real array :math:`d` (self-adjoint).
 
     Parameters
     ----------
@@ -23,11 +23,11 @@ class Diagonal(LinearOperator):
     def __init__(self, diagonal, dtype=None, name: str = "Diagonal"):
         diagonal = np.asarray(diagonal)
         dtype = diagonal.dtype if dtype is None else np.dtype(dtype)
-        self.diagonal = diagonal.astype(dtype).ravel()
+        self.diagonal = diagonal.astype(dtype)
         super().__init__(diagonal.shape, diagonal.shape, dtype=dtype, name=name)
 
-    def _matvec(self, x):
+    def _forward(self, x):
         return self.diagonal * x
 
-    def _rmatvec(self, y):
+    def _adjoint(self, y):
         return self.diagonal * y

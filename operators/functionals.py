@@ -3,7 +3,8 @@ r"""Scalar functionals with gradients and proximal maps, and their composition w
 A :class:`Functional` :math:`f` offers ``f(x)``, ``f.grad(x)`` (where differentiable) and
 ``f.prox(x, tau)`` :math:`= \arg\min_z f(z) + \|z - x\|^2 / (2\tau)`; ``f.prox_dual(y, sigma)``
 is the proximal map of :math:`\sigma f^*` by Moreau's identity, which primal–dual solvers use.
-:class:`Composite` is :math:`f(Ax)` for a linear operator :math:`A`.
+:class:`Composite` is :math:`g(K(x))` for an operator :math:`K`, linear or not: the one
+"functional after operator" type, which :mod:`solvers` takes as a regularizer.
 
 The regularizers of the flame problem are composites of the gradient operator:
 ``tikhonov(dims, spacing)`` is :math:`\Phi(f) = \sum_{d\in\{x,y,z\}} \mathrm{mean}((D_d f)^2)`
@@ -15,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from operators.base import LinearOperator
+from operators.base import Operator
 from operators.derivatives import Gradient
 
 
@@ -84,37 +85,57 @@ class L1(Functional):
         return np.sign(x) * np.maximum(np.abs(x) - tau * self.scale, 0.0)
 
     def prox_dual(self, y, sigma: float) -> np.ndarray:
-        """Projection onto the box :math:`|y_i| \\le c` (independent of ``sigma``)."""
+        r"""Projection onto the box :math:`|y_i| \le c` (independent of ``sigma``)."""
         return np.clip(y, -self.scale, self.scale)
 
 
 class Composite(Functional):
-    """:math:`x \\mapsto f(A x)` for a functional :math:`f` and a linear operator :math:`A`.
+    r""":math:`\Phi(x) = g(K(x))` for a functional :math:`g` and an operator :math:`K`.
+
+    :math:`K` may be linear (a finite-difference gradient) or nonlinear (that gradient after a
+    network); the gradient is :math:`J_K(x)^\mathsf{T} \nabla g(K(x))`.
 
     Parameters
     ----------
     functional : Functional
-        Outer functional :math:`f`.
-    op : LinearOperator
-        Inner linear operator :math:`A`.
+        Outer functional :math:`g` (e.g. :class:`SquaredL2` for Tikhonov, :class:`L1` for total
+        variation).
+    op : Operator
+        Inner operator :math:`K`.
     """
 
-    def __init__(self, functional: Functional, op: LinearOperator):
+    def __init__(self, functional: Functional, op: Operator):
+        if not isinstance(functional, Functional):
+            raise TypeError(f"the outer functional of g(K(x)) must be an operators.Functional,"
+                            f" got {type(functional).__name__}")
+        if not isinstance(op, Operator):
+            raise TypeError(f"the inner operator of g(K(x)) must be an operators.Operator, got "
+                            f"{type(op).__name__} (wrap pylops operators with "
+                            "operators.aslinearoperator)")
         super().__init__(1.0)
         self.functional = functional
         self.op = op
 
+    @property
+    def quadratic(self) -> bool:
+        """Whether :math:`g` is a squared L2 norm (Tikhonov-like)."""
+        return isinstance(self.functional, SquaredL2)
+
     def __call__(self, x) -> float:
-        return self.functional(self.op(x))
+        return float(self.functional(self.op(x)))
 
     def grad(self, x) -> np.ndarray:
-        return self.op.vjp(None, self.functional.grad(self.op(x)))
+        jacobian = self.op.linearize(x)
+        return jacobian.adjoint(self.functional.grad(jacobian.value))
 
     def prox(self, x, tau: float) -> np.ndarray:
         raise NotImplementedError(
             "the proximal map of f(Ax) has no closed form: split it in a primal-dual solver "
             "with prox_dual of the outer functional and the operator"
         )
+
+    def __repr__(self) -> str:
+        return f"Composite({type(self.functional).__name__} o {self.op.name})"
 
 
 def tikhonov(dims, spacing=1.0, dtype=np.float64) -> Composite:

@@ -37,14 +37,14 @@ from operators.base import LinearOperator
 
 
 def triangular_ils(nu, resolution: float) -> np.ndarray:
-    """Lineshape of triangular apodization, unit area, in 1/cm⁻¹.
+    r"""Lineshape of triangular apodization, unit area, in 1/cm⁻¹.
 
     Parameters
     ----------
     nu : array_like
         Offset from the line centre in cm⁻¹.
     resolution : float
-        Resolution :math:`\\Delta\\nu = 1/L` in cm⁻¹.
+        Resolution :math:`\Delta\nu = 1/L` in cm⁻¹.
     """
     mopd = 1.0 / resolution
     return mopd * np.sinc(np.asarray(nu) * mopd) ** 2  # np.sinc(x) = sin(pi x)/(pi x)
@@ -63,10 +63,10 @@ def default_output_grid(wavenumber, resolution: float) -> np.ndarray:
 
 
 class ILSConvolution(LinearOperator):
-    """Instrument-lineshape convolution and resampling of line-by-line spectra.
+    r"""Instrument-lineshape convolution and resampling of line-by-line spectra.
 
-    Maps spectral radiance :math:`I(\\text{ray}, \\eta)` on a uniform line-by-line grid to the
-    measured spectra :math:`g(\\text{ray}, \\nu_\\text{out})` (both in W/(m²·sr·cm⁻¹)). See the
+    Maps spectral radiance :math:`I(\text{ray}, \eta)` on a uniform line-by-line grid to the
+    measured spectra :math:`g(\text{ray}, \nu_\text{out})` (both in W/(m²·sr·cm⁻¹)). See the
     module docstring for the lineshape, the resolution convention and edge handling.
 
     Parameters
@@ -76,9 +76,10 @@ class ILSConvolution(LinearOperator):
     n_rays : int
         Number of spectra (rays) per application.
     resolution : float, optional
-        Spectral resolution :math:`\\Delta\\nu = 1/\\mathrm{MOPD}` in cm⁻¹ (default 8).
+        Spectral resolution :math:`\Delta\nu = 1/\mathrm{MOPD}` in cm⁻¹ (default 8).
     out_wavenumber : array_like, optional
-        Output grid in cm⁻¹ inside the window; default :func:`default_output_grid`.
+        Output grid in cm⁻¹ inside the window: any strictly monotone grid (a measurement's own
+        wavenumbers, irregular spacing allowed); default :func:`default_output_grid`.
     dtype : numpy dtype, optional
         float32 or float64 (default).
 
@@ -102,6 +103,15 @@ class ILSConvolution(LinearOperator):
         if out_wavenumber is None:
             out_wavenumber = default_output_grid(wavenumber, resolution)
         out_wavenumber = np.atleast_1d(np.asarray(out_wavenumber, dtype=np.float64))
+        if out_wavenumber.ndim != 1 or not np.all(np.isfinite(out_wavenumber)):
+            raise ValueError(f"out_wavenumber must be a 1-D grid of finite values (cm-1); got "
+                             f"shape {out_wavenumber.shape}")
+        out_steps = np.diff(out_wavenumber)
+        direction = 1.0 if out_steps.size and out_steps[0] > 0 else -1.0
+        if np.any(out_steps * direction <= 0):
+            point = int(np.flatnonzero(out_steps * direction <= 0)[0]) + 1
+            raise ValueError(f"out_wavenumber must be strictly monotone (cm-1); point {point} "
+                             f"({out_wavenumber[point]:g} cm-1) breaks the order")
         outside = (out_wavenumber < wavenumber[0]) | (out_wavenumber > wavenumber[-1])
         if np.any(outside):
             raise ValueError(
@@ -119,8 +129,8 @@ class ILSConvolution(LinearOperator):
         super().__init__((n_rays, wavenumber.size), (n_rays, out_wavenumber.size),
                          dtype=dtype, name="ILSConvolution")
 
-    def _matvec(self, x):
-        return (x.reshape(self.dims) @ self.matrix.T).ravel()
+    def _forward(self, x):
+        return x @ self.matrix.T
 
-    def _rmatvec(self, y):
-        return (y.reshape(self.dimsd) @ self.matrix).ravel()
+    def _adjoint(self, y):
+        return y @ self.matrix

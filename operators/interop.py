@@ -2,15 +2,32 @@
 
 Conversions go through DLPack where the source allows it (no copy on the same device) and
 fall back to a NumPy copy otherwise. Every framework adapter in :mod:`operators` uses these
-functions, never ad-hoc conversions.
+functions, never ad-hoc conversions. torch is imported only by :func:`to_torch` and
+``TORCH_DTYPES``: a torch tensor can only be given here once torch has been imported.
 """
 
 from __future__ import annotations
 
+import sys
+
 import jax
 import jax.numpy as jnp
 import numpy as np
-import torch
+
+
+def _is_torch_tensor(x) -> bool:
+    torch = sys.modules.get("torch")
+    return torch is not None and isinstance(x, torch.Tensor)
+
+
+def __getattr__(name):
+    """``TORCH_DTYPES``: the torch dtype of each NumPy floating-point dtype that the framework
+    adapters support, built (importing torch) when first asked for."""
+    if name == "TORCH_DTYPES":
+        import torch
+
+        return {np.dtype(np.float32): torch.float32, np.dtype(np.float64): torch.float64}
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def to_numpy(x) -> np.ndarray:
@@ -21,7 +38,7 @@ def to_numpy(x) -> np.ndarray:
     """
     if isinstance(x, np.ndarray):
         return x
-    if isinstance(x, torch.Tensor):
+    if _is_torch_tensor(x):
         return x.detach().cpu().numpy()
     return np.asarray(x)
 
@@ -36,13 +53,13 @@ def to_jax(x, dtype=None) -> jax.Array:
     dtype : dtype, optional
         Cast to this dtype after conversion.
     """
-    if isinstance(x, torch.Tensor):
+    if _is_torch_tensor(x):
         x = jax.dlpack.from_dlpack(x.detach().contiguous())
     out = jnp.asarray(x)
     return out if dtype is None else out.astype(dtype)
 
 
-def to_torch(x, dtype=None, device=None) -> torch.Tensor:
+def to_torch(x, dtype=None, device=None):
     """Return ``x`` as a torch tensor (DLPack from JAX, shared memory from NumPy).
 
     Parameters
@@ -53,7 +70,13 @@ def to_torch(x, dtype=None, device=None) -> torch.Tensor:
         Cast to this dtype after conversion.
     device : torch.device or str, optional
         Move to this device after conversion.
+
+    Returns
+    -------
+    torch.Tensor
     """
+    import torch
+
     if isinstance(x, torch.Tensor):
         out = x
     elif isinstance(x, jax.Array):

@@ -1,60 +1,51 @@
-"""Operators defined by a JAX function, differentiated by JAX."""
+"""The JAX side of :class:`operators.base.JaxOperator`: a JAX function and its derivatives on
+NumPy arrays."""
 
 from __future__ import annotations
 
 import jax
-import numpy as np
 
-from operators.base import Jacobian, Operator
 from operators.interop import to_jax, to_numpy
 
 
-class JaxOperator(Operator):
-    """An :class:`~operators.base.Operator` from a JAX function ``fun(x) -> y``.
-
-    ``jvp`` and ``vjp`` come from :func:`jax.jvp` and :func:`jax.vjp`; all three are jit-compiled
-    once per operator. ``linearize`` runs the forward pass once and keeps JAX's pullback, so a
-    solver's value and gradient cost one forward and one reverse pass.
+class JaxFunction:
+    """``fun(x) -> y`` in JAX, with :func:`jax.jvp` and :func:`jax.vjp`, all jit-compiled once.
 
     Parameters
     ----------
     fun : callable
-        JAX-traceable function from an array of shape ``dims`` to one of shape ``dimsd``.
-    dims, dimsd : tuple of int
-        Input and output shapes.
-    dtype : numpy dtype, optional
-        Dtype the input is cast to before calling ``fun`` (default float64; JAX needs
-        ``jax_enable_x64`` for float64, which importing :mod:`operators` turns on).
-    name : str, optional
-        Label for messages.
+        JAX-traceable function of one array.
+    dtype : numpy dtype
+        Dtype the inputs are cast to before calling ``fun``.
     """
 
-    def __init__(self, fun, dims, dimsd, dtype=np.float64, name=None):
-        super().__init__(dims, dimsd, dtype=dtype, name=name or getattr(fun, "__name__", "jax"))
-        self.fun = fun
+    def __init__(self, fun, dtype):
+        self.dtype = dtype
         self._f = jax.jit(fun)
-        self._jvp_fn = jax.jit(lambda x, v: jax.jvp(fun, (x,), (v,))[1])
-        self._vjp_fn = jax.jit(lambda x, w: jax.vjp(fun, x)[1](w)[0])
+        self._jvp = jax.jit(lambda x, v: jax.jvp(fun, (x,), (v,))[1])
+        self._vjp = jax.jit(lambda x, w: jax.vjp(fun, x)[1](w)[0])
         self._value_and_pullback = jax.jit(lambda x: jax.vjp(fun, x))
         self._pull = jax.jit(lambda pullback, w: pullback(w)[0])
 
     def _in(self, x):
         return to_jax(x, dtype=self.dtype)
 
-    def _forward(self, x):
+    def forward(self, x):
+        """``fun(x)`` as a NumPy array."""
         return to_numpy(self._f(self._in(x)))
 
-    def _jvp(self, x, v):
-        return to_numpy(self._jvp_fn(self._in(x), self._in(v)))
+    def jvp(self, x, v):
+        """:math:`J(x) v` as a NumPy array."""
+        return to_numpy(self._jvp(self._in(x), self._in(v)))
 
-    def _vjp(self, x, w):
-        return to_numpy(self._vjp_fn(self._in(x), self._in(w)))
+    def vjp(self, x, w):
+        r""":math:`J(x)^\mathsf{T} w` as a NumPy array."""
+        return to_numpy(self._vjp(self._in(x), self._in(w)))
 
-    def linearize(self, x) -> Jacobian:
-        xj = self._in(self._as_input(x))
+    def pullback(self, x):
+        """``(fun(x), v -> J v, w -> Jᵀ w)`` from one forward pass, keeping JAX's pullback."""
+        xj = self._in(x)
         value, pullback = self._value_and_pullback(xj)
-        return Jacobian(
-            self, to_numpy(xj), to_numpy(value),
-            jvp=lambda v: to_numpy(self._jvp_fn(xj, self._in(v))),
-            vjp=lambda w: to_numpy(self._pull(pullback, self._in(w))),
-        )
+        return (to_numpy(value),
+                lambda v: to_numpy(self._jvp(xj, self._in(v))),
+                lambda w: to_numpy(self._pull(pullback, self._in(w))))

@@ -30,18 +30,18 @@ SPEED_OF_LIGHT = 299792458.0
 BOLTZMANN = 1.380649e-23
 """Boltzmann constant :math:`k_B` in J/K (exact, SI 2019)."""
 C1 = 2.0 * PLANCK * SPEED_OF_LIGHT**2 * 1e8
-"""First radiation constant for radiance per cm⁻¹, :math:`2hc^2 \\cdot 10^8` in W·cm⁴/(m²·sr)."""
+r"""First radiation constant for radiance per cm⁻¹, :math:`2hc^2 \cdot 10^8` in W·cm⁴/(m²·sr)."""
 C2 = PLANCK * SPEED_OF_LIGHT / BOLTZMANN * 1e2
 """Second radiation constant :math:`hc/k_B` in cm·K."""
 
 
 def planck(wavenumber, temperature):
-    """Black-body spectral radiance :math:`B_\\eta(T)` in W/(m²·sr·cm⁻¹).
+    r"""Black-body spectral radiance :math:`B_\eta(T)` in W/(m²·sr·cm⁻¹).
 
     Parameters
     ----------
     wavenumber : array_like
-        Wavenumber :math:`\\eta` in cm⁻¹.
+        Wavenumber :math:`\eta` in cm⁻¹.
     temperature : array_like
         Temperature in K (positive), broadcast against ``wavenumber``.
 
@@ -67,7 +67,7 @@ def planck(wavenumber, temperature):
 
 
 def planck_table(wavenumber, nodes, rtol: float = 1e-7, max_refinements: int = 12):
-    """Nodes and cubic-spline coefficients of :math:`B_\\eta(T)` for every wavenumber.
+    r"""Nodes and cubic-spline coefficients of :math:`B_\eta(T)` for every wavenumber.
 
     Starting from ``nodes``, every interval where the spline (not-a-knot) misses the exact
     law by more than ``rtol`` (relative, checked at the interval's quarter points) is split in
@@ -91,7 +91,7 @@ def planck_table(wavenumber, nodes, rtol: float = 1e-7, max_refinements: int = 1
     nodes : ndarray, shape (m,)
         Refined temperature nodes in K.
     coef : ndarray, shape (4, m - 1, n_eta)
-        Coefficients :math:`c_j` of :math:`B = \\sum_j c_j (T - T_i)^{3-j}` on interval
+        Coefficients :math:`c_j` of :math:`B = \sum_j c_j (T - T_i)^{3-j}` on interval
         :math:`i`, in W/(m²·sr·cm⁻¹)/K^(3-j).
     """
     wavenumber = np.asarray(wavenumber, dtype=np.float64)

@@ -84,10 +84,9 @@ class VoxelSampling(LinearOperator):
         self._scatter = jax.jit(
             lambda g, v: jnp.zeros((n_fields, n_voxels), g.dtype).at[:, v].add(g))
 
-    def _matvec(self, x):
-        fields = to_jax(x.reshape(self.dims), dtype=self.dtype)
-        return to_numpy(self._gather(fields, self._jvoxel)).ravel()
+    def _forward(self, x):
+        return to_numpy(self._gather(to_jax(x, dtype=self.dtype), self._jvoxel))
 
-    def _rmatvec(self, y):
-        g = to_jax(y.reshape(self.dimsd), dtype=self.dtype)
-        return to_numpy(self._scatter(g, self._jvoxel)).ravel()
+    def _adjoint(self, y):
+        scattered = self._scatter(to_jax(y, dtype=self.dtype), self._jvoxel)
+        return to_numpy(scattered).reshape(self.dims)

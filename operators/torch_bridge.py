@@ -16,9 +16,16 @@ Pass a jitted ``fun`` and keep input shapes fixed between calls so that JAX comp
 from __future__ import annotations
 
 import jax
+import numpy as np
 import torch
 
+from operators.base import precision
 from operators.interop import to_jax, to_torch
+
+
+def _jax_dtype(tensors):
+    """The precision JAX computes in for these tensors: float64 when any of them is."""
+    return np.float64 if any(t.dtype == torch.float64 for t in tensors) else np.float32
 
 
 class _JaxFunction(torch.autograd.Function):
@@ -26,14 +33,17 @@ class _JaxFunction(torch.autograd.Function):
 
     @staticmethod
     def forward(ctx, fun, *tensors):
-        value, pullback = jax.vjp(fun, *(to_jax(t) for t in tensors))
+        ctx.dtype = _jax_dtype(tensors)
+        with precision(ctx.dtype):
+            value, pullback = jax.vjp(fun, *(to_jax(t) for t in tensors))
         ctx.pullback = pullback
         ctx.devices = [t.device for t in tensors]
         return to_torch(value, device=tensors[0].device)
 
     @staticmethod
     def backward(ctx, cotangent):
-        grads = ctx.pullback(to_jax(cotangent))
+        with precision(ctx.dtype):
+            grads = ctx.pullback(to_jax(cotangent))
         del ctx.pullback
         return (None, *(to_torch(g, device=d) for g, d in zip(grads, ctx.devices, strict=True)))
 

@@ -1,4 +1,5 @@
-"""Operators defined by a torch function, differentiated by :mod:`torch.func`."""
+"""The torch side of :class:`operators.base.TorchOperator`: a torch function and its
+derivatives (:mod:`torch.func`) on NumPy arrays. Importing this module imports torch."""
 
 from __future__ import annotations
 
@@ -6,57 +7,50 @@ import numpy as np
 import torch
 from torch.func import jvp, vjp
 
-from operators.base import Jacobian, Operator
-from operators.interop import to_numpy, to_torch
-
-_TORCH_DTYPES = {np.dtype(np.float32): torch.float32, np.dtype(np.float64): torch.float64}
+from operators.interop import TORCH_DTYPES, to_numpy, to_torch
 
 
-class TorchOperator(Operator):
-    """An :class:`~operators.base.Operator` from a torch function ``fun(x) -> y``.
-
-    ``jvp`` and ``vjp`` come from :func:`torch.func.jvp` and :func:`torch.func.vjp`.
+class TorchFunction:
+    """``fun(x) -> y`` on tensors, with :func:`torch.func.jvp` and :func:`torch.func.vjp`.
 
     Parameters
     ----------
     fun : callable
-        Function from a tensor of shape ``dims`` to one of shape ``dimsd``.
-    dims, dimsd : tuple of int
-        Input and output shapes.
-    dtype : numpy dtype, optional
-        float32 or float64 (default); the input tensor gets the matching torch dtype.
-    device : str or torch.device, optional
-        Where ``fun`` runs (default CPU).
-    name : str, optional
-        Label for messages.
+        Function of one tensor.
+    dtype : numpy dtype
+        float32 or float64: the tensors get the matching torch dtype.
+    device : str or torch.device
+        Where ``fun`` runs.
     """
 
-    def __init__(self, fun, dims, dimsd, dtype=np.float64, device="cpu", name=None):
-        super().__init__(dims, dimsd, dtype=dtype,
-                         name=name or getattr(fun, "__name__", "torch"))
-        if self.dtype not in _TORCH_DTYPES:
-            raise ValueError(f"TorchOperator supports float32 and float64, got {self.dtype}")
+    def __init__(self, fun, dtype, device):
+        dtype = np.dtype(dtype)
+        if dtype not in TORCH_DTYPES:
+            raise ValueError(f"TorchOperator supports float32 and float64, got {dtype}")
         self.fun = fun
+        self.dtype = TORCH_DTYPES[dtype]
         self.device = torch.device(device)
 
     def _in(self, x):
-        return to_torch(x, dtype=_TORCH_DTYPES[self.dtype], device=self.device)
+        return to_torch(x, dtype=self.dtype, device=self.device)
 
-    def _forward(self, x):
+    def forward(self, x):
+        """``fun(x)`` as a NumPy array."""
         with torch.no_grad():
             return to_numpy(self.fun(self._in(x)))
 
-    def _jvp(self, x, v):
+    def jvp(self, x, v):
+        """:math:`J(x) v` as a NumPy array."""
         return to_numpy(jvp(self.fun, (self._in(x),), (self._in(v),))[1])
 
-    def _vjp(self, x, w):
+    def vjp(self, x, w):
+        r""":math:`J(x)^\mathsf{T} w` as a NumPy array."""
         return to_numpy(vjp(self.fun, self._in(x))[1](self._in(w))[0])
 
-    def linearize(self, x) -> Jacobian:
-        xt = self._in(self._as_input(x))
-        value, pullback = vjp(self.fun, xt)
-        return Jacobian(
-            self, to_numpy(xt), to_numpy(value),
-            jvp=lambda v: to_numpy(jvp(self.fun, (xt,), (self._in(v),))[1]),
-            vjp=lambda w: to_numpy(pullback(self._in(w))[0]),
-        )
+    def pullback(self, x):
+        """``(fun(x), v -> J v, w -> Jᵀ w)`` from one forward pass, keeping torch's pullback."""
+        xt = self._in(x)
+        value, pull = vjp(self.fun, xt)
+        return (to_numpy(value),
+                lambda v: to_numpy(jvp(self.fun, (xt,), (self._in(v),))[1]),
+                lambda w: to_numpy(pull(self._in(w))[0]))

@@ -1,11 +1,11 @@
-"""Generic solvers for :math:`\\min_\\theta \\|F(\\theta) - d\\|^2 + \\lambda\\,\\Phi(\\theta)`.
+r"""Generic solvers for :math:`\min_\theta \|F(\theta) - d\|^2 + \lambda\,\Phi(\theta)`.
 
 Solvers work on :class:`Problem` objects built from :mod:`operators` and do not care whether
 the parameters are voxel values or network weights. Pick one by name::
 
     import solvers
     problem = solvers.Problem(forward, data, regularizer=operators.total_variation(dims),
-                              lam=1e-3, lower=0.0, x0=x0, kind="voxel")
+                              lam=1e-3, lower=0.0, x0=x0)
     result = solvers.solve(problem, "adam", lr=1e-2, max_iter=500,
                            callbacks=[solvers.ProgressBar(), solvers.Checkpoint("run.npz")])
     result = solvers.solve(problem, "adam", lr=1e-2, max_iter=1000, resume="run.npz")
@@ -26,7 +26,7 @@ from solvers.parameter_choice import (
     plot_l_curve,
     problem_weight,
 )
-from solvers.problem import KINDS, Evaluation, Problem, Regularizer
+from solvers.problem import Evaluation, Problem, Regularizer
 from solvers.registry import UnknownSolverError, available, get, register
 from solvers.stopping import StoppingRule
 
@@ -51,7 +51,6 @@ def solve(problem: Problem, method: str, *, x0=None, callbacks=(), seed: int = 0
 
 
 __all__ = [
-    "KINDS",
     "Callback",
     "Checkpoint",
     "Evaluation",

@@ -12,42 +12,50 @@ projection onto the bounds. The moments are saved in checkpoints.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from solvers.base import Solver, Step
+from solvers.options import SolverOptions, option
 from solvers.registry import register
+
+
+@dataclass(frozen=True)
+class AdamOptions(SolverOptions):
+    r"""Options of ``adam`` (:class:`Adam`).
+
+    Attributes
+    ----------
+    lr : float
+        Learning rate :math:`\eta`, parameter units per step (default 1e-3); > 0.
+    betas : tuple of 2 float
+        Moment decay rates :math:`(\beta_1, \beta_2)`, dimensionless (default (0.9, 0.999));
+        each in [0, 1).
+    eps : float
+        :math:`\epsilon` added to :math:`\sqrt{\hat v}`, gradient units (default 1e-8); >= 0.
+    """
+
+    lr: float = option(1e-3, "> 0", lambda v: v > 0)
+    betas: tuple[float, float] = option((0.9, 0.999), "two numbers in [0, 1)",
+                                        lambda v: all(0 <= b < 1 for b in v))
+    eps: float = option(1e-8, ">= 0", lambda v: v >= 0)
 
 
 @register("adam")
 class Adam(Solver):
-    """Adam with projection onto the bounds; see the module docstring.
+    """Adam with projection onto the bounds; see the module docstring and
+    :class:`AdamOptions`."""
 
-    Options
-    -------
-    lr : float
-        Learning rate :math:`\\eta` in parameter units (default 1e-3).
-    betas : (float, float)
-        Moment decay rates :math:`(\\beta_1, \\beta_2)` in [0, 1) (default (0.9, 0.999)).
-    eps : float
-        :math:`\\epsilon` (default 1e-8).
-    """
-
-    defaults = {"lr": 1e-3, "betas": (0.9, 0.999), "eps": 1e-8}
-
-    def check_options(self):
-        o = self.options
-        betas = tuple(o["betas"])
-        if not (o["lr"] > 0 and len(betas) == 2 and all(0 <= b < 1 for b in betas)
-                and o["eps"] >= 0):
-            raise ValueError(f"adam options out of range: need lr > 0, betas two numbers in "
-                             f"[0, 1), eps >= 0; got {o}")
+    Options = AdamOptions
 
     def init_state(self, run):
         zeros = np.zeros(run.problem.dims, run.problem.dtype)
         return {"m": zeros, "v": zeros.copy()}
 
     def step(self, run) -> Step:
-        lr, (b1, b2), eps = self.options["lr"], self.options["betas"], self.options["eps"]
+        o = self.options
+        lr, (b1, b2), eps = o.lr, o.betas, o.eps
         k = run.iteration + 1
         g = run.start_evaluation().grad
         m = b1 * run.state["m"] + (1 - b1) * g

@@ -1,16 +1,17 @@
 """The solver base class: one run loop for every solver.
 
-A solver subclasses :class:`Solver`, declares its algorithm options in ``defaults``, the problem
-kinds it ``supports``, and implements :meth:`Solver.init_state` and :meth:`Solver.step`. The
-base class checks the problem, evaluates the starting point, runs the loop with the stopping
-rules and callbacks, and saves and resumes checkpoints. A step must not change ``run.x``,
-``run.state`` or ``run.history``: it returns the new parameters, the objective there, the new
-state and diagnostics, so that an interruption at any moment leaves a consistent state behind.
+A solver subclasses :class:`Solver`, declares its algorithm options as a frozen dataclass
+``Options`` (:mod:`solvers.options`) and implements :meth:`Solver.init_state` and
+:meth:`Solver.step`. The base class checks the problem, evaluates
+the starting point, runs the loop with the stopping rules and callbacks, and saves and resumes
+checkpoints through :func:`solvers.checkpoint.save_run` and :func:`solvers.checkpoint.load_run`.
+A step must not change ``run.x``, ``run.state`` or ``run.history``: it returns the new
+parameters, the objective there, the new state and diagnostics, so that an interruption at any
+moment leaves a consistent state behind.
 """
 
 from __future__ import annotations
 
-import difflib
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -18,9 +19,10 @@ from typing import Any
 import numpy as np
 
 from solvers.callbacks import as_callback
-from solvers.checkpoint import load_checkpoint, normalize, save_checkpoint
+from solvers.checkpoint import load_run, save_run
 from solvers.history import History, Result
-from solvers.problem import KINDS, Evaluation, Problem
+from solvers.options import SolverOptions
+from solvers.problem import Evaluation, Problem
 from solvers.stopping import StoppingRule
 
 
@@ -123,19 +125,8 @@ class RunState:
         return self.current
 
     def save(self, path):
-        """Write a checkpoint of this run (see :mod:`solvers.checkpoint`)."""
-        c = self.current
-        meta = {
-            "solver": self.solver.name, "options": normalize(self.solver.options),
-            "stopping": self.solver.stopping.as_dict(), "seed": self.seed,
-            "iteration": self.iteration, "problem": self.problem.name,
-            "dims": list(self.problem.dims), "dtype": str(self.problem.dtype),
-            "elapsed": self.elapsed, "history": self.history.as_dict(),
-            "current": {"loss": c.loss, "misfit": c.misfit, "regularizer": c.regularizer,
-                        "sample": c.sample},
-        }
-        grad = c.grad if c.has_grad else None
-        return save_checkpoint(path, meta, self.x, grad, self.solver.state_to_arrays(self))
+        """Write a checkpoint of this run (see :func:`solvers.checkpoint.save_run`)."""
+        return save_run(path, self)
 
 
 class Solver:
@@ -146,14 +137,19 @@ class Solver:
     max_iter, rtol_loss, rtol_x, gtol, time_budget, loss_window
         Stopping rules, see :class:`solvers.stopping.StoppingRule`.
     **options
-        Algorithm options, listed in the solver's ``defaults``.
+        Algorithm options, the fields of the solver's ``Options`` dataclass.
+
+    Raises
+    ------
+    solvers.options.OptionError
+        For an unknown option, a wrong type or a value out of range, naming the solver, the
+        option, the value and what is allowed.
     """
 
     name = "solver"
-    defaults: dict[str, Any] = {}
-    supports = frozenset(KINDS)
-    #: Advice appended to the error for an unsupported kind, per kind.
-    kind_advice: dict[str, str] = {}
+    #: The algorithm options: a frozen dataclass checked on construction (see
+    #: :mod:`solvers.options`); ``help(solver_class.Options)`` lists them.
+    Options: type[SolverOptions] = SolverOptions
     stochastic_ok = True
     #: Whether resuming from a checkpoint reproduces an uninterrupted run exactly.
     exact_resume = True
@@ -161,32 +157,15 @@ class Solver:
     def __init__(self, *, max_iter: int = 100, rtol_loss: float | None = None,
                  rtol_x: float | None = None, gtol: float | None = None,
                  time_budget: float | None = None, loss_window: int = 1, **options):
-        unknown = [k for k in options if k not in self.defaults]
-        if unknown:
-            known = list(self.defaults)
-            close = difflib.get_close_matches(unknown[0], known + ["max_iter", "rtol_loss",
-                                                                  "rtol_x", "gtol",
-                                                                  "time_budget",
-                                                                  "loss_window"], n=1)
-            hint = f" Did you mean {close[0]!r}?" if close else ""
-            raise TypeError(
-                f"solver {self.name!r} has no option {unknown[0]!r}.{hint} Its options are "
-                f"{', '.join(known) or '(none)'}, plus the stopping rules max_iter, rtol_loss, "
-                "rtol_x, gtol, time_budget, loss_window"
-            )
-        self.options = {**self.defaults, **options}
+        self.options = self.Options.from_kwargs(options)
         self.stopping = StoppingRule(max_iter, rtol_loss, rtol_x, gtol, time_budget,
                                      loss_window)
-        self.check_options()
 
     def __repr__(self) -> str:
         opts = ", ".join(f"{k}={v!r}" for k, v in self.options.items())
         return f"<solver {self.name}: {opts}; {self.stopping}>"
 
     # -- hooks for subclasses ------------------------------------------------------------------
-    def check_options(self) -> None:
-        """Validate ``self.options``; raise ValueError with a fix."""
-
     def check_problem(self, problem: Problem) -> None:
         """Solver-specific checks beyond kind and stochasticity; raise
         :class:`UnsupportedProblemError`."""
@@ -213,12 +192,6 @@ class Solver:
         """Raise :class:`UnsupportedProblemError` if this solver should not solve ``problem``."""
         if not isinstance(problem, Problem):
             raise TypeError(f"expected a solvers.Problem, got {type(problem).__name__}")
-        if problem.kind not in self.supports:
-            advice = self.kind_advice.get(problem.kind, "")
-            raise UnsupportedProblemError(
-                f"solver {self.name!r} does not support problems of kind {problem.kind!r} "
-                f"(it supports {', '.join(sorted(self.supports))}). {advice}".strip()
-            )
         if problem.stochastic and not self.stochastic_ok:
             raise UnsupportedProblemError(
                 f"solver {self.name!r} needs the full deterministic objective but the problem "
@@ -262,12 +235,20 @@ class Solver:
                 cb.on_end(run)
         return Result(x=run.x, history=run.history, stop_reason=reason,
                       iterations=run.iteration, solver=self.name,
-                      options={**self.options, **self.stopping.as_dict()},
+                      options={**self.options.as_dict(), **self.stopping.as_dict()},
                       problem=problem.name, seed=run.seed, elapsed=run.elapsed,
                       metadata=dict(problem.metadata))
 
     def loop(self, run: RunState) -> str:
-        """Iterate until a stopping rule fires; returns the stop reason."""
+        """Iterate until a stopping rule fires; returns the stop reason.
+
+        A step to non-finite parameters or loss is not taken, and a non-finite gradient at
+        the new iterate ends the run there: the run stops with a reason starting
+        ``"non-finite"`` and keeps the last iterate whose parameters and loss are finite.
+        """
+        if not np.isfinite(run.current.loss):
+            return (f"non-finite: the loss is {run.current.loss} at iteration {run.iteration}; "
+                    "check the starting point and the data")
         while True:
             reason = self.stopping.budget_spent(run.iteration, run.call_seconds)
             if reason:
@@ -279,12 +260,20 @@ class Solver:
 
     def record(self, run: RunState, step: Step) -> str | None:
         """Make ``step`` the current iterate, log it, call callbacks; return a stop reason."""
+        bad = _non_finite(step)
+        if bad:
+            return (f"non-finite: {bad} at iteration {run.iteration + 1}; kept iteration "
+                    f"{run.iteration}, the last finite one (lower the step size or learning "
+                    "rate, or check the problem)")
         dx = float(np.linalg.norm(np.asarray(step.x, np.float64) - run.x))
         x_norm = float(np.linalg.norm(run.x))
         step_ratio = dx / x_norm if x_norm > 0 else (np.inf if dx > 0 else 0.0)
         run.x, run.current, run.state = step.x, step.evaluation, step.state
         run.iteration += 1
         grad_norm = _log_row(run, step.info)
+        if not np.isfinite(grad_norm):
+            return (f"non-finite: the gradient at iteration {run.iteration} (its loss "
+                    f"{run.current.loss:.6g} is finite and kept; check the problem's derivatives)")
         for cb in run.callbacks:
             if cb(run):
                 return "callback: a callback asked to stop"
@@ -306,33 +295,25 @@ class Solver:
         return run
 
     def _resumed(self, problem, path, callbacks) -> RunState:
-        ck = load_checkpoint(path)
+        ck = load_run(path, self, problem)
         meta = ck.meta
-        if meta["solver"] != self.name:
-            raise ValueError(f"checkpoint {path} was written by solver {meta['solver']!r}, "
-                             f"not {self.name!r}; resume with solvers.get({meta['solver']!r})")
-        options = normalize(self.options)
-        if meta["options"] != options:
-            diff = {k: (meta["options"].get(k), options.get(k))
-                    for k in set(options) | set(meta["options"])
-                    if meta["options"].get(k) != options.get(k)}
-            raise ValueError(f"checkpoint {path} used other options (checkpoint, now): {diff}; "
-                             "resume with the same algorithm options")
-        if tuple(meta["dims"]) != problem.dims:
-            raise ValueError(f"checkpoint {path} holds parameters of shape {tuple(meta['dims'])}"
-                             f", the problem's are {problem.dims}")
         x = problem.check_point(ck.x, "checkpoint x")
-        c = meta["current"]
-        grad = None if ck.grad is None else ck.grad.astype(problem.dtype)
-        current = Evaluation(c["loss"], c["misfit"], c["regularizer"], grad=grad,
-                             sample=c["sample"])
-        run = RunState(self, problem, x, current, {}, History(meta["history"]), meta["seed"],
-                       iteration=meta["iteration"], elapsed_before=meta["elapsed"],
-                       callbacks=callbacks)
-        if grad is None:
-            run.current = run.evaluate(x, c["sample"])
+        run = RunState(self, problem, x, ck.evaluation(problem.dtype), {},
+                       History(meta["history"]), meta["seed"], iteration=meta["iteration"],
+                       elapsed_before=meta["elapsed"], callbacks=callbacks)
+        if run.current.grad is None:
+            run.current = run.evaluate(x, run.current.sample)
         run.state = self.state_from_arrays(ck.state, run)
         return run
+
+
+def _non_finite(step: Step) -> str | None:
+    """What of a step is NaN or infinite (its parameters or loss), or None."""
+    if not np.all(np.isfinite(step.x)):
+        return f"{int(np.size(step.x) - np.isfinite(step.x).sum())} non-finite parameters"
+    if not np.isfinite(step.evaluation.loss):
+        return f"the loss is {step.evaluation.loss}"
+    return None
 
 
 def _log_row(run: RunState, info: dict[str, float]) -> float:

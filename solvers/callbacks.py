@@ -14,7 +14,8 @@ from tqdm import tqdm
 
 
 class Callback:
-    """Base class: override any of :meth:`on_start`, :meth:`__call__`, :meth:`on_end`."""
+    """Base class: override any of :meth:`Callback.on_start`, :meth:`Callback.__call__`,
+    :meth:`Callback.on_end`."""
 
     def on_start(self, run) -> None:
         """Called once before the first iteration (after a resume, with its state)."""

@@ -2,20 +2,28 @@
 
 A checkpoint is one ``.npz`` file holding the parameters, the gradient at them, the solver's
 state arrays (Adam moments, Gauss–Newton damping, dual variables...) and a JSON header (solver
-name and options, seed, iteration, history, elapsed time). It is written to a temporary file in
-the same folder, synced, then renamed over the target, so a crash never leaves a torn file.
+name and options, seed, iteration, history, elapsed time). It is written to a uniquely named
+temporary file in the same folder, synced, then renamed over the target
+(:func:`solvers.atomic.write_atomic`), so a crash never leaves a torn file and two writers never
+share a temporary file; a damaged file is reported with its path (:func:`load_checkpoint`).
 Randomness needs no saved generator state: each iteration draws from
 ``numpy.random.default_rng([seed, iteration, ...])``.
+
+The run loop (:mod:`solvers.base`) uses two calls: :func:`save_run` writes a run's state and
+:func:`load_run` reads it back after checking that it belongs to the solver, the options and
+the problem at hand.
 """
 
 from __future__ import annotations
 
 import json
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from solvers.atomic import CorruptFileError, read_npz, write_atomic
+from solvers.problem import Evaluation
 
 FORMAT = "invflame-solver-checkpoint/1"
 _STATE = "state."
@@ -42,6 +50,14 @@ class CheckpointData:
     x: np.ndarray
     grad: np.ndarray | None
     state: dict[str, np.ndarray]
+
+    def evaluation(self, dtype) -> Evaluation:
+        """The objective's parts at ``x`` as saved, the gradient cast to ``dtype`` (None when
+        the checkpoint holds no gradient: the caller evaluates it again)."""
+        c = self.meta["current"]
+        grad = None if self.grad is None else self.grad.astype(dtype)
+        return Evaluation(c["loss"], c["misfit"], c["regularizer"], grad=grad,
+                          sample=c["sample"])
 
 
 def _plain(value):
@@ -70,32 +86,101 @@ def save_checkpoint(path, meta: dict, x: np.ndarray, grad: np.ndarray | None,
     state : dict of ndarray
         Solver state arrays.
     """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     arrays = {"x": np.asarray(x),
               "meta": np.array(json.dumps({"format": FORMAT, **meta}, default=_plain))}
     if grad is not None:
         arrays["grad"] = np.asarray(grad)
     arrays.update({_STATE + k: np.asarray(v) for k, v in state.items()})
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "wb") as f:
-        np.savez(f, **arrays)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
-    return path
+    return write_atomic(path, lambda stream: np.savez(stream, **arrays))
 
 
 def load_checkpoint(path) -> CheckpointData:
-    """Read a checkpoint written by :func:`save_checkpoint`."""
+    """Read a checkpoint written by :func:`save_checkpoint`.
+
+    Raises
+    ------
+    FileNotFoundError
+        If there is no file at ``path``.
+    CorruptFileError
+        If the file is damaged (truncated, empty, garbage) or lacks the checkpoint's entries;
+        the message names it and says to delete it and start the run again.
+    ValueError
+        If it is a readable ``.npz`` of another format.
+    """
     path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"no checkpoint at {path}")
-    with np.load(path, allow_pickle=False) as f:
-        meta = json.loads(str(f["meta"]))
-        if meta.get("format") != FORMAT:
-            raise ValueError(f"{path} is not a solver checkpoint (format {meta.get('format')!r},"
-                             f" expected {FORMAT!r})")
-        state = {k[len(_STATE):]: f[k] for k in f.files if k.startswith(_STATE)}
-        grad = f["grad"] if "grad" in f.files else None
-        return CheckpointData(meta, f["x"], grad, state)
+    fix = "delete it and start the run again without resuming"
+    arrays = read_npz(path, "checkpoint", fix)
+    try:
+        meta = json.loads(str(arrays["meta"]))
+        x = arrays["x"]
+    except (KeyError, json.JSONDecodeError) as err:
+        raise CorruptFileError(f"checkpoint {path} lacks its header or parameters ({err}); "
+                               f"{fix}") from err
+    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
+        found = meta.get("format") if isinstance(meta, dict) else None
+        raise ValueError(f"{path} is not a solver checkpoint (format {found!r}, expected "
+                         f"{FORMAT!r})")
+    state = {k[len(_STATE):]: v for k, v in arrays.items() if k.startswith(_STATE)}
+    return CheckpointData(meta, x, arrays.get("grad"), state)
+
+
+def save_run(path, run) -> Path:
+    """Write a checkpoint of a run; returns its path.
+
+    Parameters
+    ----------
+    path : str or Path
+        Target file (``*.npz``).
+    run : solvers.RunState
+        The run: its solver (name, options, stopping rules, state arrays), problem, iterate,
+        objective, history, seed and elapsed time are saved.
+    """
+    c = run.current
+    meta = {
+        "solver": run.solver.name, "options": normalize(run.solver.options.as_dict()),
+        "stopping": run.solver.stopping.as_dict(), "seed": run.seed,
+        "iteration": run.iteration, "problem": run.problem.name,
+        "dims": list(run.problem.dims), "dtype": str(run.problem.dtype),
+        "elapsed": run.elapsed, "history": run.history.as_dict(),
+        "current": {"loss": c.loss, "misfit": c.misfit, "regularizer": c.regularizer,
+                    "sample": c.sample},
+    }
+    grad = c.grad if c.has_grad else None
+    return save_checkpoint(path, meta, run.x, grad, run.solver.state_to_arrays(run))
+
+
+def load_run(path, solver, problem) -> CheckpointData:
+    """Read a checkpoint to resume ``solver`` on ``problem`` from it.
+
+    Parameters
+    ----------
+    path : str or Path
+        Checkpoint written by :func:`save_run`.
+    solver : solvers.Solver
+        The solver that continues the run (its stopping rules may differ from the
+        checkpoint's, e.g. a larger ``max_iter``).
+    problem : solvers.Problem
+        The problem it continues on.
+
+    Raises
+    ------
+    ValueError
+        If the checkpoint was written by another solver, with other options (each changed
+        option is named with both values) or for parameters of another shape.
+    """
+    ck = load_checkpoint(path)
+    meta = ck.meta
+    if meta["solver"] != solver.name:
+        raise ValueError(f"checkpoint {path} was written by solver {meta['solver']!r}, "
+                         f"not {solver.name!r}; resume with solvers.get({meta['solver']!r})")
+    saved, now = meta["options"], normalize(solver.options.as_dict())
+    changed = [f"{k}: {saved.get(k)!r} in the checkpoint, {now.get(k)!r} now"
+               for k in sorted(set(saved) | set(now)) if saved.get(k) != now.get(k)]
+    if changed:
+        raise ValueError(f"checkpoint {path} was written with other options of solver "
+                         f"{solver.name!r} ({'; '.join(changed)}); resume with the same "
+                         "options, or start a new run")
+    if tuple(meta["dims"]) != problem.dims:
+        raise ValueError(f"checkpoint {path} holds parameters of shape {tuple(meta['dims'])}, "
+                         f"the problem's are {problem.dims}")
+    return ck

@@ -16,85 +16,104 @@ least squares problems*, 2004). Near a zero-residual solution the damping vanish
 convergence is fast (quadratic in the limit).
 
 Only squared-L2 regularizers fit this form; for total variation use ``pdhg``. The Jacobian is
-formed per iteration in weight space, which makes no sense for a network queried at every ray
-sample (``kind="neural-field"``).
+applied many times per iteration, so a problem that is not ``linearizable`` is refused.
+
+The stacked Jacobian is built with the operator algebra,
+
+.. math:: A = \begin{pmatrix} J_F \\ \sqrt{\lambda c}\, J_K \end{pmatrix} D_\text{free},
+
+(:func:`operators.vstack` of the Jacobians, :class:`operators.Diagonal` of the mask of the
+parameters not held at a bound), so it is an :class:`operators.LinearOperator` that LSQR takes
+as it is.
 """
 
 from __future__ import annotations
 
-import numpy as np
-from scipy.sparse.linalg import LinearOperator, lsqr
+from dataclasses import dataclass
 
+import numpy as np
+from scipy.sparse.linalg import lsqr
+
+import operators
 from solvers.base import Solver, Step, UnsupportedProblemError
+from solvers.capabilities import require_linearizable
+from solvers.options import SolverOptions, option
 from solvers.problem import sum_of_squares
 from solvers.registry import register
 
 
-def _stacked_jacobian(problem, evaluation, free=None):
-    """The Jacobian of the stacked residual (restricted to the ``free`` parameters when given,
-    as a flat boolean mask) and the stacked residual, at the evaluation's point."""
+def stacked_jacobian(problem, evaluation, free=None):
+    r"""The Jacobian of the stacked residual and the stacked residual at the evaluation's point.
+
+    Parameters
+    ----------
+    problem : solvers.Problem
+        With a squared-L2 regularizer or none.
+    evaluation : solvers.Evaluation
+        Carrying ``forward_jacobian`` (and ``regularizer_jacobian`` when regularized).
+    free : ndarray of bool, optional
+        Parameters free to move, shape ``problem.dims``; the Jacobian is restricted to them.
+
+    Returns
+    -------
+    A : operators.LinearOperator
+        Parameters ``problem.dims`` to the stacked residual (flat, loss units^½).
+    residual : ndarray
+        The stacked residual :math:`R(\theta)`, shaped like ``A``'s output, float64.
+    """
     jf = evaluation.forward_jacobian
-    blocks = [(jf, 1.0)]
-    residuals = [(jf.value - problem.data).ravel()]
+    blocks = [jf]
+    residuals = [jf.value - problem.data]
     reg = problem.regularizer
     if reg is not None and problem.lam > 0:
         g = reg.functional
-        weight = np.sqrt(problem.lam * g.scale)
+        weight = float(np.sqrt(problem.lam * g.scale))
         jk = evaluation.regularizer_jacobian
         offset = 0.0 if g.offset is None else g.offset
-        blocks.append((jk, weight))
-        residuals.append((weight * (jk.value - offset)).ravel())
-    sizes = [r.size for r in residuals]
-    cuts = np.cumsum(sizes)[:-1]
-    dims = problem.dims
-    mask = 1.0 if free is None else free
+        blocks.append(weight * jk)
+        residuals.append(weight * (jk.value - offset))
+    stack = operators.vstack(blocks, name="GaussNewtonJacobian")
+    residual = stack.combination.join(residuals).astype(np.float64)
+    if free is not None:
+        stack = stack @ operators.Diagonal(free.astype(problem.dtype), name="free")
+    return stack, residual
 
-    def matvec(v):
-        v = (mask * v).reshape(dims)
-        return np.concatenate([w * j.jvp(None, v).ravel() for j, w in blocks])
 
-    def rmatvec(y):
-        parts = np.split(y, cuts)
-        return mask * sum(w * j.vjp(None, p.reshape(j.dimsd)).ravel()
-                          for (j, w), p in zip(blocks, parts, strict=True))
+@dataclass(frozen=True)
+class GaussNewtonOptions(SolverOptions):
+    r"""Options of ``gauss-newton`` (:class:`GaussNewton`).
 
-    n = int(np.prod(dims))
-    op = LinearOperator((sum(sizes), n), matvec=matvec, rmatvec=rmatvec, dtype=np.float64)
-    return op, np.concatenate(residuals).astype(np.float64)
+    Attributes
+    ----------
+    damping : float
+        Initial damping :math:`\mu_0`, loss units per squared parameter unit (default 1e-3);
+        > 0. A tiny value gives nearly undamped Gauss–Newton steps.
+    inner_iter : int
+        Maximum LSQR iterations per solve (default 100); >= 1.
+    inner_tol : float
+        LSQR ``atol`` and ``btol``, dimensionless (default 1e-10); >= 0.
+    max_retries : int
+        Damped solves per iteration before giving up (default 10); >= 1.
+    """
+
+    damping: float = option(1e-3, "> 0", lambda v: v > 0)
+    inner_iter: int = option(100, ">= 1", lambda v: v >= 1)
+    inner_tol: float = option(1e-10, ">= 0", lambda v: v >= 0)
+    max_retries: int = option(10, ">= 1", lambda v: v >= 1)
 
 
 @register("gauss-newton")
 class GaussNewton(Solver):
-    """Levenberg–Marquardt-damped Gauss–Newton with inner LSQR; see the module docstring.
+    """Levenberg–Marquardt-damped Gauss–Newton with inner LSQR; see the module docstring and
+    :class:`GaussNewtonOptions`."""
 
-    Options
-    -------
-    damping : float
-        Initial damping :math:`\\mu_0 > 0` (loss units per squared parameter unit;
-        default 1e-3); a tiny value gives nearly undamped Gauss–Newton steps.
-    inner_iter : int
-        Maximum LSQR iterations per solve (default 100).
-    inner_tol : float
-        LSQR ``atol`` and ``btol`` (default 1e-10).
-    max_retries : int
-        Damped solves per iteration before giving up (default 10).
-    """
-
-    defaults = {"damping": 1e-3, "inner_iter": 100, "inner_tol": 1e-10, "max_retries": 10}
-    supports = frozenset({"generic", "voxel", "neural-centres"})
-    kind_advice = {"neural-field": (
-        "Gauss-Newton on a neural field queried at every ray sample builds a huge dense "
-        "Jacobian in weight space: use the voxel-centre neural reparameterization "
-        "(kind='neural-centres'), a first-order solver such as 'adam', or 'lbfgs' on the "
-        "deterministic objective (a problem without a stochastic value_and_grad).")}
+    Options = GaussNewtonOptions
     stochastic_ok = False
 
-    def check_options(self):
-        o = self.options
-        if not (o["damping"] > 0 and int(o["inner_iter"]) >= 1 and o["inner_tol"] >= 0
-                and int(o["max_retries"]) >= 1):
-            raise ValueError(f"gauss-newton options out of range: need damping > 0, "
-                             f"inner_iter >= 1, inner_tol >= 0, max_retries >= 1; got {o}")
+    def check(self, problem):
+        """The linearizable capability first: it decides whether this solver fits at all."""
+        require_linearizable(self.name, problem)
+        super().check(problem)
 
     def check_problem(self, problem):
         reg = problem.regularizer
@@ -116,17 +135,19 @@ class GaussNewton(Solver):
         free = None
         if problem.bounded:  # parameters held at a bound by the gradient stay fixed this step
             grad = current.grad
-            free = (problem.projected_gradient(x0, grad) == grad).ravel()
-        op, residual = _stacked_jacobian(problem, current, free)
+            free = problem.projected_gradient(x0, grad) == grad
+        op, residual = stacked_jacobian(problem, current, free)
         mu, nu = run.state["damping"], run.state["nu"]
         for retry in range(int(o["max_retries"])):
-            sol = lsqr(op, -residual, damp=np.sqrt(mu), atol=o["inner_tol"],
+            sol = lsqr(op, -residual.ravel(), damp=np.sqrt(mu), atol=o["inner_tol"],
                        btol=o["inner_tol"], iter_lim=int(o["inner_iter"]))
-            step = (sol[0] if free is None else free * sol[0]).reshape(problem.dims)
+            step = sol[0].reshape(problem.dims)
+            if free is not None:
+                step = free * step
             unprojected = x0 + step.astype(problem.dtype)
             x = problem.project(unprojected)
             delta = (x - x0).ravel().astype(np.float64)
-            predicted = current.loss - sum_of_squares(op.matvec(delta) + residual)
+            predicted = current.loss - sum_of_squares(op.matvec(delta) + residual.ravel())
             info = {"damping": mu, "inner_iterations": sol[2], "retries": retry}
             if predicted > 0:
                 trial = run.evaluate(x)

@@ -13,54 +13,62 @@ objective the trials of one iteration share that iteration's sample.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from solvers.base import Solver, Step
+from solvers.options import SolverOptions, option
 from solvers.registry import register
+
+
+@dataclass(frozen=True)
+class GradientDescentOptions(SolverOptions):
+    r"""Options of ``gd`` (:class:`GradientDescent`).
+
+    Attributes
+    ----------
+    step : float
+        First trial step :math:`\alpha_0`, parameter units per gradient unit (default 1); > 0.
+    shrink : float
+        Backtracking factor, dimensionless (default 0.5); in (0, 1).
+    grow : float
+        Factor applied to the accepted step for the next first trial (default 2); >= 1.
+    c1 : float
+        Armijo constant, dimensionless (default 1e-4); in (0, 1).
+    max_backtracks : int
+        Trials per iteration before giving up (default 30); >= 1.
+    """
+
+    step: float = option(1.0, "> 0", lambda v: v > 0)
+    shrink: float = option(0.5, "in (0, 1)", lambda v: 0 < v < 1)
+    grow: float = option(2.0, ">= 1", lambda v: v >= 1)
+    c1: float = option(1e-4, "in (0, 1)", lambda v: 0 < v < 1)
+    max_backtracks: int = option(30, ">= 1", lambda v: v >= 1)
 
 
 @register("gd")
 class GradientDescent(Solver):
-    """Gradient descent with Armijo backtracking; see the module docstring.
+    """Gradient descent with Armijo backtracking; see the module docstring and
+    :class:`GradientDescentOptions`."""
 
-    Options
-    -------
-    step : float
-        First trial step :math:`\\alpha_0` (parameter units per gradient unit; default 1).
-    shrink : float
-        Backtracking factor in (0, 1) (default 0.5).
-    grow : float
-        Factor >= 1 applied to the accepted step for the next first trial (default 2).
-    c1 : float
-        Armijo constant in (0, 1) (default 1e-4).
-    max_backtracks : int
-        Trials per iteration before giving up (default 30).
-    """
-
-    defaults = {"step": 1.0, "shrink": 0.5, "grow": 2.0, "c1": 1e-4, "max_backtracks": 30}
-
-    def check_options(self):
-        o = self.options
-        if not (o["step"] > 0 and 0 < o["shrink"] < 1 and o["grow"] >= 1 and 0 < o["c1"] < 1
-                and int(o["max_backtracks"]) >= 1):
-            raise ValueError(f"gd options out of range: need step > 0, 0 < shrink < 1, "
-                             f"grow >= 1, 0 < c1 < 1, max_backtracks >= 1; got {o}")
+    Options = GradientDescentOptions
 
     def init_state(self, run):
-        return {"step": float(self.options["step"])}
+        return {"step": self.options.step}
 
     def step(self, run) -> Step:
         o = self.options
         current = run.start_evaluation()
         grad = current.grad
         alpha = run.state["step"]
-        for _ in range(int(o["max_backtracks"])):
+        for _ in range(o.max_backtracks):
             x = run.problem.project(run.x - alpha * grad)
             trial = run.evaluate(x)
             decrease = float(np.vdot(grad, x - run.x))
-            if trial.loss <= current.loss + o["c1"] * decrease:
-                return Step(x, trial, {"step": alpha * o["grow"]}, {"step": alpha})
-            alpha *= o["shrink"]
+            if trial.loss <= current.loss + o.c1 * decrease:
+                return Step(x, trial, {"step": alpha * o.grow}, {"step": alpha})
+            alpha *= o.shrink
         return Step(run.x, current, {"step": alpha}, {"step": alpha},
-                    stop=f"line search failed: no decrease after {o['max_backtracks']} trials "
+                    stop=f"line search failed: no decrease after {o.max_backtracks} trials "
                          f"(last step {alpha:.3e})")

@@ -12,10 +12,10 @@ COLUMNS = ("iteration", "loss", "misfit", "regularizer", "grad_norm", "time")
 
 
 class History:
-    """Table of per-iteration values, one row per iteration (row 0 is the starting point).
+    r"""Table of per-iteration values, one row per iteration (row 0 is the starting point).
 
-    Columns: ``iteration``; ``loss`` (objective), ``misfit`` (:math:`\\|F(\\theta)-d\\|^2`),
-    ``regularizer`` (:math:`\\Phi(\\theta)`, unweighted), ``grad_norm`` (norm of the projected
+    Columns: ``iteration``; ``loss`` (objective), ``misfit`` (:math:`\|F(\theta)-d\|^2`),
+    ``regularizer`` (:math:`\Phi(\theta)`, unweighted), ``grad_norm`` (norm of the projected
     gradient), ``time`` (wall seconds since the run began, s), plus solver-specific ones. A
     value a row does not have is NaN. ``history["loss"]`` is a NumPy array.
     """

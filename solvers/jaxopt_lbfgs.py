@@ -14,40 +14,47 @@ only its stable L-BFGS(-B) classes.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from solvers.base import Solver, Step
 from solvers.evaluation_cache import EvaluationCache
+from solvers.options import SolverOptions, option
 from solvers.registry import register
 
 _LEAF = "leaf"
 
 
-@register("jaxopt-lbfgs")
-class JaxoptLBFGS(Solver):
-    """jaxopt L-BFGS (L-BFGS-B with bounds); see the module docstring.
+@dataclass(frozen=True)
+class JaxoptLBFGSOptions(SolverOptions):
+    """Options of ``jaxopt-lbfgs`` (:class:`JaxoptLBFGS`), passed to jaxopt.
 
-    Options
-    -------
+    Attributes
+    ----------
     history_size : int
-        Number of correction pairs kept (default 10).
+        Number of correction pairs kept (default 10); >= 1.
     tol : float
-        Stop when jaxopt's error (gradient norm, projected with bounds) is at most ``tol``
-        (default 1e-8).
+        Stop when jaxopt's error (gradient norm, projected with bounds; loss units per
+        parameter unit) is at most ``tol`` (default 1e-8); >= 0.
     maxls : int
-        Maximum line-search steps (default 30).
+        Maximum line-search steps (default 30); >= 1.
     """
 
-    defaults = {"history_size": 10, "tol": 1e-8, "maxls": 30}
-    stochastic_ok = False
+    history_size: int = option(10, ">= 1", lambda v: v >= 1)
+    tol: float = option(1e-8, ">= 0", lambda v: v >= 0)
+    maxls: int = option(30, ">= 1", lambda v: v >= 1)
 
-    def check_options(self):
-        o = self.options
-        if not (int(o["history_size"]) >= 1 and o["tol"] >= 0 and int(o["maxls"]) >= 1):
-            raise ValueError(f"jaxopt-lbfgs options out of range: need history_size >= 1, "
-                             f"tol >= 0, maxls >= 1; got {o}")
+
+@register("jaxopt-lbfgs")
+class JaxoptLBFGS(Solver):
+    """jaxopt L-BFGS (L-BFGS-B with bounds); see the module docstring and
+    :class:`JaxoptLBFGSOptions`."""
+
+    Options = JaxoptLBFGSOptions
+    stochastic_ok = False
 
     def _setup(self, run):
         """The jaxopt solver for ``run.problem``, pointed at ``run``.
@@ -85,8 +92,8 @@ class JaxoptLBFGS(Solver):
             return jax.pure_callback(host, out_shapes, params)
 
         o = self.options
-        kwargs = {"value_and_grad": True, "history_size": int(o["history_size"]),
-                  "tol": o["tol"], "maxls": int(o["maxls"])}
+        kwargs = {"value_and_grad": True, "history_size": o.history_size, "tol": o.tol,
+                  "maxls": o.maxls}
         if not problem.bounded:
             return jaxopt.LBFGS(fun, **kwargs), {}, active
         lo = -np.inf if problem.lower is None else problem.lower
@@ -117,8 +124,8 @@ class JaxoptLBFGS(Solver):
         ev = cache.get(x) or run.evaluate(x)
         error = float(state.error)
         stop = None
-        if error <= self.options["tol"]:
-            stop = f"converged: jaxopt error {error:.3e} <= tol {self.options['tol']:g}"
+        if error <= self.options.tol:
+            stop = f"converged: jaxopt error {error:.3e} <= tol {self.options.tol:g}"
         elif bool(state.failed_linesearch):
             stop = f"line search failed (jaxopt error {error:.3e})"
         return Step(x, ev, {"jaxopt": state}, {"step": float(state.stepsize)}, stop=stop)

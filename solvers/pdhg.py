@@ -16,7 +16,9 @@ bounds handled by projection in the primal step:
     \bar\theta = \theta^{+} + \vartheta(\theta^{+} - \theta), \quad
     y^{+} = \mathrm{prox}_{\sigma h^*}(y + \sigma A \bar\theta),
 
-with :math:`\tau = \sigma = 0.99 / \|A\|` (power iteration, 5 % margin). The dual variables are
+with :math:`\tau = \sigma = 0.99 / \|A\|` (:func:`operators.operator_norm`, 5 % margin).
+:math:`A` is built with the operator algebra (:func:`operators.vstack` of the two Jacobians),
+and the dual variable :math:`y = (p, q)` is an output of that stack. The dual variables are
 kept from one outer iteration to the next. If :math:`F` and :math:`K` are linear the model is
 exact and the run is plain Chambolle–Pock; otherwise a step that increases the true objective
 is halved until it does not (at most ``max_backtracks`` times).
@@ -24,70 +26,92 @@ is halved until it does not (at most ``max_backtracks`` times).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
+import operators
 from operators import Composite
 from solvers.base import Solver, Step, UnsupportedProblemError
+from solvers.capabilities import require_linearizable
+from solvers.options import SolverOptions, option
 from solvers.registry import register
 
 
-def _operator_norm(apply, adjoint, dims, dtype, iterations, rng) -> float:
-    """:math:`\\|A\\|` by power iteration on :math:`A^\\mathsf{T}A`."""
-    v = rng.standard_normal(dims).astype(dtype)
-    v /= np.linalg.norm(v)
-    value = 0.0
-    for _ in range(iterations):
-        w = adjoint(apply(v))
-        value = float(np.linalg.norm(w))
-        if value == 0:
-            return 0.0
-        v = w / value
-    return float(np.sqrt(value))
+def stacked_operator(evaluation, use_regularizer: bool):
+    """The stacked Jacobian :math:`A = (J; L)` (or :math:`(J)` alone) at an evaluation's point.
+
+    Parameters
+    ----------
+    evaluation : solvers.Evaluation
+        Carrying ``forward_jacobian`` and, when ``use_regularizer``, ``regularizer_jacobian``.
+    use_regularizer : bool
+        Whether the regularizer's Jacobian is a block.
+
+    Returns
+    -------
+    operators.LinearOperator
+        From the parameters to the stacked dual space; ``.combination`` is the
+        :class:`operators.base.VStack` whose ``split``/``join`` convert its outputs to blocks.
+    """
+    blocks = [evaluation.forward_jacobian]
+    if use_regularizer:
+        blocks.append(evaluation.regularizer_jacobian)
+    return operators.vstack(blocks, name="PDHGOperator")
+
+
+@dataclass(frozen=True)
+class PDHGOptions(SolverOptions):
+    r"""Options of ``pdhg`` (:class:`PDHG`).
+
+    Attributes
+    ----------
+    inner_iter : int
+        Chambolle–Pock iterations per outer iteration (default 50); >= 1.
+    tau, sigma : float or None
+        Primal step (parameter units per gradient unit) and dual step (default None: both
+        :math:`0.99/\|A\|`); both None or both > 0 (need :math:`\tau\sigma\|A\|^2 < 1`).
+    norm_iter : int
+        Power iterations for :math:`\|A\|` (default 20); >= 1. Recomputed every outer
+        iteration when :math:`F` or :math:`K` is nonlinear, once otherwise.
+    max_backtracks : int
+        Step halvings on the true objective per outer iteration (default 10); >= 0.
+    """
+
+    inner_iter: int = option(50, ">= 1", lambda v: v >= 1)
+    tau: float | None = option(None, "None or > 0", lambda v: v is None or v > 0)
+    sigma: float | None = option(None, "None or > 0", lambda v: v is None or v > 0)
+    norm_iter: int = option(20, ">= 1", lambda v: v >= 1)
+    max_backtracks: int = option(10, ">= 0", lambda v: v >= 0)
+
+    def check(self):
+        """``tau`` and ``sigma`` are given together or not at all."""
+        if (self.tau is None) != (self.sigma is None):
+            raise self.error("sigma" if self.sigma is None else "tau",
+                             None if self.sigma is None else self.tau,
+                             "given together with the other: set both tau and sigma, or "
+                             "neither")
 
 
 @register("pdhg")
 class PDHG(Solver):
-    """Linearized primal–dual (Chambolle–Pock) iterations; see the module docstring.
+    """Linearized primal–dual (Chambolle–Pock) iterations; see the module docstring and
+    :class:`PDHGOptions`."""
 
-    Options
-    -------
-    inner_iter : int
-        Chambolle–Pock iterations per outer iteration (default 50).
-    tau, sigma : float or None
-        Primal and dual step sizes; None picks :math:`0.99/\\|A\\|` for both
-        (need :math:`\\tau\\sigma\\|A\\|^2 < 1`).
-    norm_iter : int
-        Power iterations for :math:`\\|A\\|` (default 20); recomputed every outer iteration
-        when :math:`F` or :math:`K` is nonlinear, once otherwise.
-    max_backtracks : int
-        Step halvings on the true objective per outer iteration (default 10).
-    """
-
-    defaults = {"inner_iter": 50, "tau": None, "sigma": None, "norm_iter": 20,
-                "max_backtracks": 10}
-    supports = frozenset({"generic", "voxel", "neural-centres"})
-    kind_advice = {"neural-field": (
-        "Linearizing a neural field queried at every ray sample in weight space makes no "
-        "sense: use the voxel-centre neural reparameterization (kind='neural-centres') or a "
-        "first-order solver such as 'adam'.")}
+    Options = PDHGOptions
     stochastic_ok = False
 
-    def check_options(self):
-        o = self.options
-        steps_ok = all(o[k] is None or o[k] > 0 for k in ("tau", "sigma"))
-        if not (steps_ok and (o["tau"] is None) == (o["sigma"] is None)
-                and int(o["inner_iter"]) >= 1 and int(o["norm_iter"]) >= 1
-                and int(o["max_backtracks"]) >= 0):
-            raise ValueError(f"pdhg options out of range: need tau and sigma both None or both "
-                             f"> 0, inner_iter >= 1, norm_iter >= 1, max_backtracks >= 0; "
-                             f"got {o}")
+    def check(self, problem):
+        """The linearizable capability first: it decides whether this solver fits at all."""
+        require_linearizable(self.name, problem)
+        super().check(problem)
 
     def check_problem(self, problem):
         reg = problem.regularizer
         if reg is not None and isinstance(reg.functional, Composite):
             raise UnsupportedProblemError(
                 "pdhg needs the regularizer's outer functional to have a proximal map; give "
-                "it as Regularizer(g, K) with g e.g. operators.L1, not a Composite g(Ax)"
+                "it as a pair (g, K) with g e.g. operators.L1, not a Composite g(K(x))"
             )
 
     def _uses_regularizer(self, problem) -> bool:
@@ -95,37 +119,26 @@ class PDHG(Solver):
 
     def _linear(self, problem) -> bool:
         return problem.forward.linear and (not self._uses_regularizer(problem)
-                                           or problem.regularizer.operator.linear)
+                                           or problem.regularizer.op.linear)
 
     def init_state(self, run):
         problem = run.problem
         state = {"p": np.zeros(problem.forward.dimsd, problem.dtype), "norm": np.nan}
         if self._uses_regularizer(problem):
-            state["q"] = np.zeros(problem.regularizer.operator.dimsd, problem.dtype)
+            state["q"] = np.zeros(problem.regularizer.op.dimsd, problem.dtype)
         return state
 
     def step(self, run) -> Step:
         o = self.options
         problem = run.problem
         current = run.linearized()
-        jf = current.forward_jacobian
         use_reg = self._uses_regularizer(problem)
+        stack = stacked_operator(current, use_reg)
+        jf = current.forward_jacobian
         jk = current.regularizer_jacobian if use_reg else None
-
-        def apply(v):
-            return [jf.jvp(None, v)] + ([jk.jvp(None, v)] if use_reg else [])
-
-        def adjoint(ys):
-            out = jf.vjp(None, ys[0])
-            return out + jk.vjp(None, ys[1]) if use_reg else out
-
-        n_data = int(np.prod(jf.dimsd))
         norm = run.state["norm"]
         if not (self._linear(problem) and np.isfinite(norm)):
-            norm = 1.05 * _operator_norm(
-                lambda v: np.concatenate([a.ravel() for a in apply(v)]),
-                lambda y: adjoint(np.split(y, [n_data])),
-                problem.dims, problem.dtype, int(o["norm_iter"]), run.rng())
+            norm = 1.05 * operators.operator_norm(stack, int(o["norm_iter"]), seed=run.rng())
         tau = o["tau"] or 0.99 / max(norm, np.finfo(float).tiny)
         sigma = o["sigma"] or 0.99 / max(norm, np.finfo(float).tiny)
 
@@ -134,11 +147,13 @@ class PDHG(Solver):
         c = jk.value if use_reg else None              # regularizer model: L (x - x0) + c
         g, lam = (problem.regularizer.functional, problem.lam) if use_reg else (None, 0.0)
         p, q = run.state["p"], run.state.get("q")
+        blocks = stack.combination
         x = x0
         for _ in range(int(o["inner_iter"])):
-            x_new = problem.project(x - tau * adjoint([p, q]))
+            y = blocks.join([p, q] if use_reg else [p])
+            x_new = problem.project(x - tau * stack.adjoint(y))
             x_bar = 2.0 * x_new - x
-            a = apply(x_bar - x0)
+            a = blocks.split(stack(x_bar - x0))
             # prox of sigma h1* for h1(u) = ||u - b||^2 (Moreau)
             v = p + sigma * a[0]
             p = (v - sigma * b) / (1.0 + sigma / 2.0)

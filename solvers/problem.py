@@ -13,18 +13,18 @@ linear (the finite-difference gradient of a voxel grid) or nonlinear (that gradi
 network evaluated at voxel centres); gradient methods use ``K.vjp`` and primal–dual methods use
 ``g.prox_dual`` with ``K``'s linearization.
 
-``kind`` says what :math:`\theta` is, so that a solver can refuse a pairing that makes no sense:
+Capability flags tell a solver what it may do with the problem, whatever the parameters
+represent:
 
-``"generic"``
-    Any parameter vector with no further structure (default).
-``"voxel"``
-    Field values on a voxel grid.
-``"neural-centres"``
-    Network weights, with the network evaluated once at voxel centres and the renderer sampling
-    that grid (the Jacobian is a product of a small network Jacobian and the voxel one).
-``"neural-field"``
-    Network weights, with the network queried at every ray sample (huge, dense Jacobian: only
-    first-order and quasi-Newton solvers make sense).
+``linearizable``
+    Whether linearizing :math:`F` and :math:`K` at a point and applying those Jacobians many
+    times (Gauss–Newton's inner least squares, PDHG's inner iterations) is affordable. False
+    when one Jacobian product costs as much as a whole pass over the data and is only worth it
+    once per gradient (e.g. a network queried at every sample of every measurement): solvers
+    that build stacked Jacobians refuse such a problem and name the solvers that fit it.
+``stochastic``
+    Whether a stochastic ``value_and_grad`` replaces the full objective (read-only; set by
+    passing ``value_and_grad``).
 
 A problem may carry a stochastic ``value_and_grad(theta, iteration, rng) -> (loss, grad)``
 (e.g. a random subset of rays per iteration); first-order solvers use it instead of the full
@@ -38,78 +38,42 @@ from typing import Any
 
 import numpy as np
 
-from operators import Functional, Operator, SquaredL2
+from operators import Composite, Operator
 
-KINDS = ("generic", "voxel", "neural-centres", "neural-field")
+#: :math:`\Phi = g \circ K` as solvers name it: the class :class:`operators.Composite` itself.
+Regularizer = Composite
 
 
-class Regularizer:
-    r"""A regularizer :math:`\Phi(\theta) = g(K(\theta))`.
-
-    Parameters
-    ----------
-    functional : operators.Functional
-        Outer functional :math:`g` (e.g. :class:`operators.SquaredL2` for Tikhonov,
-        :class:`operators.L1` for total variation).
-    operator : operators.Operator
-        Inner operator :math:`K` from the parameters, linear or not.
-    """
-
-    def __init__(self, functional: Functional, operator: Operator):
-        if not isinstance(functional, Functional):
-            raise TypeError(f"the regularizer's outer functional must be an operators.Functional,"
-                            f" got {type(functional).__name__}")
-        if not isinstance(operator, Operator):
-            raise TypeError(f"the regularizer's inner operator must be an operators.Operator, "
-                            f"got {type(operator).__name__} (wrap pylops operators with "
-                            "operators.aslinearoperator)")
-        self.functional = functional
-        self.operator = operator
-
-    @classmethod
-    def coerce(cls, regularizer) -> Regularizer | None:
-        """``None``, a :class:`Regularizer`, an :class:`operators.Composite` ``g(A x)`` (as from
-        :func:`operators.tikhonov`) or a pair ``(g, K)``, as a :class:`Regularizer`."""
-        if regularizer is None or isinstance(regularizer, Regularizer):
-            return regularizer
-        if hasattr(regularizer, "functional") and hasattr(regularizer, "op"):
-            return cls(regularizer.functional, regularizer.op)
-        if isinstance(regularizer, tuple) and len(regularizer) == 2:
-            return cls(*regularizer)
-        raise TypeError(
-            "regularizer must be None, solvers.Regularizer(g, K), an operators.Composite such as "
-            f"operators.total_variation(...), or a pair (g, K); got {type(regularizer).__name__}"
-        )
-
-    @property
-    def quadratic(self) -> bool:
-        """Whether :math:`g` is a squared L2 norm (Tikhonov-like)."""
-        return isinstance(self.functional, SquaredL2)
-
-    def __call__(self, x) -> float:
-        return float(self.functional(self.operator(x)))
-
-    def __repr__(self) -> str:
-        return f"Regularizer({type(self.functional).__name__} o {self.operator.name})"
+def as_regularizer(regularizer) -> Composite | None:
+    r"""``None``, an :class:`operators.Composite` :math:`g \circ K` (as from
+    :func:`operators.tikhonov`) or a pair ``(g, K)``, as a :class:`operators.Composite`."""
+    if regularizer is None or isinstance(regularizer, Composite):
+        return regularizer
+    if isinstance(regularizer, tuple) and len(regularizer) == 2:
+        return Composite(*regularizer)
+    raise TypeError(
+        "regularizer must be None, an operators.Composite g(K(x)) such as "
+        f"operators.total_variation(...), or a pair (g, K); got {type(regularizer).__name__}"
+    )
 
 
 def sum_of_squares(r: np.ndarray) -> float:
-    """:math:`\\|r\\|_2^2` accumulated in float64."""
+    r""":math:`\|r\|_2^2` accumulated in float64."""
     r = np.asarray(r, dtype=np.float64).ravel()
     return float(r @ r)
 
 
 class Evaluation:
-    """The objective at one point: total loss, its parts and a lazily computed gradient.
+    r"""The objective at one point: total loss, its parts and a lazily computed gradient.
 
     Attributes
     ----------
     loss : float
-        :math:`L(\\theta)`.
+        :math:`L(\theta)`.
     misfit : float
-        :math:`\\|F(\\theta) - d\\|^2` (NaN when a stochastic ``value_and_grad`` gave the loss).
+        :math:`\|F(\theta) - d\|^2` (NaN when a stochastic ``value_and_grad`` gave the loss).
     regularizer : float
-        :math:`\\Phi(\\theta)`, unweighted (0 without a regularizer, NaN as above).
+        :math:`\Phi(\theta)`, unweighted (0 without a regularizer, NaN as above).
     sample : int or None
         Iteration whose random sample produced this evaluation; None when deterministic.
     forward_jacobian, regularizer_jacobian : operators.Jacobian or None
@@ -134,7 +98,7 @@ class Evaluation:
 
     @property
     def grad(self) -> np.ndarray:
-        """:math:`\\nabla L(\\theta)`, shape of the parameters (computed on first access)."""
+        r""":math:`\nabla L(\theta)`, shape of the parameters (computed on first access)."""
         if self._grad is None:
             if self._grad_fn is None:
                 raise RuntimeError("this evaluation carries no gradient")
@@ -164,8 +128,9 @@ class Problem:
         :math:`F`, parameters (shape ``forward.dims``) to predicted data (``forward.dimsd``),
         e.g. radiance in W/(m²·sr·cm⁻¹).
     data : array_like
-        Measured data :math:`d`, shape ``forward.dimsd`` (or that many elements), same units.
-    regularizer : Regularizer, operators.Composite or (Functional, Operator), optional
+        Measured data :math:`d`, shape ``forward.dimsd`` (a linear forward operator also takes
+        the flat vector, as pylops does), same units.
+    regularizer : operators.Composite or (Functional, Operator), optional
         :math:`\Phi = g \circ K`; None for no regularization.
     lam : float, optional
         Weight :math:`\lambda \ge 0` (default 1e-3, as in the paper).
@@ -174,8 +139,12 @@ class Problem:
         the parameters' units; None for unbounded.
     x0 : array_like, optional
         Default starting point, shape ``forward.dims``; must satisfy the bounds.
-    kind : {"generic", "voxel", "neural-centres", "neural-field"}, optional
-        What the parameters represent (see the module docstring); solvers check it.
+    linearizable : bool, optional
+        Whether Jacobians of :math:`F` and :math:`K` may be applied many times per iteration
+        (default True; see the module docstring); solvers that need it check it.
+    advice : str, optional
+        What a solver that refuses the problem for a missing capability should suggest
+        instead, in the words of the application (e.g. a cheaper parameterization).
     name : str, optional
         Label for results and messages.
     metadata : dict, optional
@@ -186,7 +155,7 @@ class Problem:
     """
 
     def __init__(self, forward: Operator, data, regularizer=None, lam: float = 1e-3,
-                 lower=None, upper=None, x0=None, kind: str = "generic",
+                 lower=None, upper=None, x0=None, linearizable: bool = True, advice: str = "",
                  name: str | None = None, metadata: dict[str, Any] | None = None,
                  value_and_grad=None):
         if not isinstance(forward, Operator):
@@ -197,19 +166,21 @@ class Problem:
         self.dims = forward.dims
         self.dtype = forward.dtype
         data = np.asarray(data)
-        if data.size != int(np.prod(forward.dimsd)):
+        flat = forward.linear and data.ndim == 1 and data.size == int(np.prod(forward.dimsd))
+        if data.shape != forward.dimsd and not flat:
             raise ValueError(f"data has shape {data.shape} but the forward operator "
-                             f"{forward.name} predicts shape {forward.dimsd}")
+                             f"{forward.name} predicts shape {forward.dimsd}; reshape or "
+                             "transpose the data to that shape")
         if not np.all(np.isfinite(data)):
             bad = np.argwhere(~np.isfinite(data.reshape(forward.dimsd)))
             raise ValueError(f"data hold {len(bad)} NaN or infinite values (first at index "
                              f"{tuple(int(i) for i in bad[0])}); remove or mask them before "
                              "building the problem")
         self.data = data.reshape(forward.dimsd).astype(self.dtype, copy=False)
-        self.regularizer = Regularizer.coerce(regularizer)
-        if self.regularizer is not None and self.regularizer.operator.dims != self.dims:
-            raise ValueError(f"the regularizer's operator {self.regularizer.operator.name} takes "
-                             f"shape {self.regularizer.operator.dims}, the parameters have "
+        self.regularizer = as_regularizer(regularizer)
+        if self.regularizer is not None and self.regularizer.op.dims != self.dims:
+            raise ValueError(f"the regularizer's operator {self.regularizer.op.name} takes "
+                             f"shape {self.regularizer.op.dims}, the parameters have "
                              f"shape {self.dims}")
         if not np.isfinite(lam) or lam < 0:
             raise ValueError(f"lam must be a finite number >= 0, got {lam}")
@@ -218,9 +189,10 @@ class Problem:
         self.upper = _bound(upper, self.dims, self.dtype, "upper")
         if self.lower is not None and self.upper is not None and np.any(self.lower > self.upper):
             raise ValueError("lower bound exceeds upper bound somewhere; check lower <= upper")
-        if kind not in KINDS:
-            raise ValueError(f"kind must be one of {', '.join(KINDS)}; got {kind!r}")
-        self.kind = kind
+        if not isinstance(linearizable, bool | np.bool_):
+            raise TypeError(f"linearizable must be True or False, got {linearizable!r}")
+        self.linearizable = bool(linearizable)
+        self.advice = str(advice)
         self.name = name or f"problem({forward.name})"
         self.metadata = dict(metadata or {})
         if value_and_grad is not None and not callable(value_and_grad):
@@ -286,14 +258,14 @@ class Problem:
         misfit = sum_of_squares(residual)
         reg, jk, z = 0.0, None, None
         if self.regularizer is not None:
-            jk = self.regularizer.operator.linearize(x)
+            jk = self.regularizer.op.linearize(x)
             z = jk.value
             reg = float(self.regularizer.functional(z))
 
         def grad():
-            g = 2.0 * jf.vjp(None, residual)
+            g = 2.0 * jf.adjoint(residual)
             if jk is not None and self.lam > 0:
-                g = g + self.lam * jk.vjp(None, self.regularizer.functional.grad(z))
+                g = g + self.lam * jk.adjoint(self.regularizer.functional.grad(z))
             return np.asarray(g, dtype=self.dtype).reshape(self.dims)
 
         return Evaluation(misfit + self.lam * reg, misfit, reg, grad_fn=grad,
@@ -306,6 +278,7 @@ class Problem:
         return sum_of_squares(r) + self.lam * reg
 
     def __repr__(self) -> str:
-        return (f"<Problem {self.name}: kind={self.kind}, params {self.dims}, data "
+        return (f"<Problem {self.name}: params {self.dims}, data "
                 f"{self.forward.dimsd}, regularizer={self.regularizer}, lam={self.lam:g}, "
-                f"bounded={self.bounded}, stochastic={self.stochastic}>")
+                f"bounded={self.bounded}, linearizable={self.linearizable}, "
+                f"stochastic={self.stochastic}>")

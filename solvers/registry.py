@@ -21,7 +21,10 @@ class UnknownSolverError(ValueError):
 
 
 def register(name: str):
-    """Class decorator registering a solver class under ``name`` (also sets ``cls.name``).
+    """Class decorator registering a solver class under ``name``.
+
+    Sets ``cls.name``, and names the solver in its ``Options`` dataclass for error messages (a
+    solver that declares no ``Options`` of its own gets a subclass of the inherited one).
 
     Parameters
     ----------
@@ -36,6 +39,11 @@ def register(name: str):
             raise ValueError(f"a solver named {name!r} is already registered "
                              f"({_REGISTRY[name].__qualname__})")
         cls.name = name
+        if "Options" not in vars(cls):
+            cls.Options = type(f"{cls.__name__}Options", (cls.Options,),
+                               {"__doc__": cls.Options.__doc__, "__module__": cls.__module__,
+                                "__qualname__": f"{cls.__qualname__}.Options"})
+        cls.Options.solver = name
         _REGISTRY[name] = cls
         return cls
 

@@ -12,40 +12,48 @@ count and elapsed time). ``exact_resume`` is False for this solver.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy.optimize import Bounds, minimize
 
 from solvers.base import Solver, Step
 from solvers.evaluation_cache import EvaluationCache
+from solvers.options import SolverOptions, option
 from solvers.registry import register
+
+
+@dataclass(frozen=True)
+class ScipyLBFGSBOptions(SolverOptions):
+    """Options of ``lbfgs`` (:class:`ScipyLBFGSB`), passed to SciPy's L-BFGS-B.
+
+    Attributes
+    ----------
+    maxcor : int
+        Number of correction pairs kept (default 10); >= 1.
+    ftol : float
+        SciPy's relative reduction tolerance of the objective, dimensionless (default 2.2e-9);
+        >= 0.
+    pgtol : float
+        SciPy's tolerance on the largest projected gradient component, loss units per
+        parameter unit (default 1e-5); >= 0.
+    maxls : int
+        Maximum line-search steps per iteration (default 20); >= 1.
+    """
+
+    maxcor: int = option(10, ">= 1", lambda v: v >= 1)
+    ftol: float = option(2.2e-9, ">= 0", lambda v: v >= 0)
+    pgtol: float = option(1e-5, ">= 0", lambda v: v >= 0)
+    maxls: int = option(20, ">= 1", lambda v: v >= 1)
 
 
 @register("lbfgs")
 class ScipyLBFGSB(Solver):
-    """SciPy L-BFGS-B; see the module docstring.
+    """SciPy L-BFGS-B; see the module docstring and :class:`ScipyLBFGSBOptions`."""
 
-    Options
-    -------
-    maxcor : int
-        Number of correction pairs kept (default 10).
-    ftol : float
-        SciPy's relative reduction tolerance (default 2.2e-9).
-    pgtol : float
-        SciPy's tolerance on the largest projected gradient component (default 1e-5).
-    maxls : int
-        Maximum line-search steps per iteration (default 20).
-    """
-
-    defaults = {"maxcor": 10, "ftol": 2.2e-9, "pgtol": 1e-5, "maxls": 20}
+    Options = ScipyLBFGSBOptions
     stochastic_ok = False
     exact_resume = False
-
-    def check_options(self):
-        o = self.options
-        if not (int(o["maxcor"]) >= 1 and o["ftol"] >= 0 and o["pgtol"] >= 0
-                and int(o["maxls"]) >= 1):
-            raise ValueError(f"lbfgs options out of range: need maxcor >= 1, ftol >= 0, "
-                             f"pgtol >= 0, maxls >= 1; got {o}")
 
     def loop(self, run) -> str:
         problem = run.problem
@@ -84,8 +92,8 @@ class ScipyLBFGSB(Solver):
         result = minimize(fun, run.x.astype(np.float64).ravel(), jac=True, method="L-BFGS-B",
                           bounds=bounds, callback=callback,
                           options={"maxiter": self.stopping.max_iter - run.iteration,
-                                   "maxcor": int(o["maxcor"]), "ftol": o["ftol"],
-                                   "gtol": o["pgtol"], "maxls": int(o["maxls"])})
+                                   "maxcor": o.maxcor, "ftol": o.ftol, "gtol": o.pgtol,
+                                   "maxls": o.maxls})
         if reason:
             return reason[0]
         return f"scipy L-BFGS-B: {result.message}"

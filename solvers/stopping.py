@@ -12,18 +12,18 @@ def _check_tolerance(name, value):
 
 @dataclass(frozen=True)
 class StoppingRule:
-    """When to stop; each rule is off when None.
+    r"""When to stop; each rule is off when None.
 
     Parameters
     ----------
     max_iter : int
         Maximum number of iterations in total (a resumed run counts those done before).
     rtol_loss : float, optional
-        Stop when :math:`|L_k - L_{k-w}| \\le \\text{rtol}\\,|L_{k-w}|` with
+        Stop when :math:`|L_k - L_{k-w}| \le \text{rtol}\,|L_{k-w}|` with
         :math:`w` = ``loss_window``: the objective changed by less than ``rtol`` over the last
         :math:`w` iterations.
     rtol_x : float, optional
-        Stop when :math:`\\|\\theta_k - \\theta_{k-1}\\| \\le \\text{rtol}\\,\\|\\theta_{k-1}\\|`.
+        Stop when :math:`\|\theta_k - \theta_{k-1}\| \le \text{rtol}\,\|\theta_{k-1}\|`.
     gtol : float, optional
         Stop when the norm of the projected gradient is at most ``gtol`` (loss units per
         parameter unit).

@@ -2,6 +2,10 @@
 
 Each module in :data:`COMMANDS` defines ``add_parser(subparsers)``, which registers its
 subcommand and sets ``func`` (``run(args) -> int``) as the parser default.
+
+Bad input (:class:`invflame.errors.InvflameError`, a damaged or missing file) ends the command
+with its message on stderr and exit status 2, without a traceback; ``--debug`` shows the
+traceback.
 """
 
 from __future__ import annotations
@@ -10,9 +14,22 @@ import argparse
 import sys
 
 from invflame import __version__
-from invflame.cli import co2, demo, experiment, lines, phantom, reproduce, sweep
+from invflame.cli import (
+    co2,
+    config,
+    demo,
+    experiment,
+    export,
+    lines,
+    phantom,
+    reproduce,
+    rig,
+    sweep,
+)
+from invflame.errors import InvflameError
+from solvers.atomic import CorruptFileError
 
-COMMANDS = [reproduce, experiment, sweep, demo, phantom, lines, co2]
+COMMANDS = [reproduce, experiment, config, export, sweep, demo, phantom, lines, co2, rig]
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -23,6 +40,8 @@ def build_parser() -> argparse.ArgumentParser:
         "data of a flame and reconstruct its 3-D temperature and composition.",
     )
     parser.add_argument("--version", action="version", version=f"invflame {__version__}")
+    parser.add_argument("--debug", action="store_true",
+                        help="show the traceback of an error instead of its message only")
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for module in COMMANDS:
         module.add_parser(subparsers)
@@ -30,9 +49,17 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``invflame`` command; returns the process exit code."""
+    """Entry point of the ``invflame`` command; returns the process exit code (2 for bad
+    input, whose message goes to stderr)."""
     args = build_parser().parse_args(argv)
-    return int(args.func(args) or 0)
+    try:
+        return int(args.func(args) or 0)
+    except (InvflameError, CorruptFileError, FileNotFoundError, NotADirectoryError,
+            IsADirectoryError) as err:
+        if args.debug:
+            raise
+        print(f"invflame {args.command}: error: {err}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from invflame.errors import ConfigError
+
 DEFAULT_REFERENCE = (
     Path(__file__).resolve().parents[2]
     / ".."
@@ -76,15 +78,22 @@ def run(args: argparse.Namespace) -> int:
         from invflame.spectroscopy.co2_validation import format_report, validate_against_par
 
         if not args.reference.is_file():
-            print(f"reference line file not found: {args.reference} (pass --reference PATH)")
-            return 2
+            raise FileNotFoundError(f"reference line file not found: {args.reference} (pass "
+                                    "--reference PATH)")
         comparison = validate_against_par(args.reference, args.nu_min, args.nu_max)
         print(format_report(comparison, max_rows=args.rows))
         return 0
     from invflame.spectroscopy.co2_lines import generate_co2_lines
     from invflame.spectroscopy.linelist import write_par
 
+    if not args.nu_min < args.nu_max:
+        raise ConfigError(f"--nu-min {args.nu_min:g} must be below --nu-max {args.nu_max:g} "
+                          "(cm-1)")
     lines = generate_co2_lines(args.nu_min, args.nu_max, J_max=args.j_max, S_min=args.s_min)
+    if not len(lines):
+        raise ConfigError(f"no generated CO2 line in {args.nu_min:g}-{args.nu_max:g} cm-1 "
+                          f"(J'' <= {args.j_max}, S(296 K) >= {args.s_min:g}): {args.path} was "
+                          "not written; the generated lines span about 345-1070 cm-1")
     write_par(lines, args.path)
     print(
         f"wrote {len(lines)} lines ({lines.nu.min():.4f}–{lines.nu.max():.4f} cm-1) to {args.path}"

@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
+from invflame.cli import arguments
+from invflame.errors import ConfigError
 from invflame.experiments import config as configuration
 
 CONFIG_HELP = ("experiment configuration (TOML); every key has a default, see "
@@ -21,10 +23,14 @@ def add_parser(subparsers) -> None:
         "with the configured representation, regularizer and solver, and write the fields, "
         "history, metrics (summary.json), figures and a log into --out.")
     run.add_argument("config", type=Path, help=CONFIG_HELP)
-    run.add_argument("--out", type=Path, default=Path("results/run"),
+    run.add_argument("--out", type=arguments.folder, default="results/run",
                      help="output folder (default results/run)")
     run.add_argument("--resume", action="store_true",
-                     help="continue an interrupted run from its checkpoint")
+                     help="continue an interrupted run from its checkpoint; refused if the "
+                     "configuration, the truth, the measured data or the code changed since")
+    run.add_argument("--force", action="store_true",
+                     help="with --resume: continue even if something changed, recording what "
+                     "in log.txt and summary.json")
     run.add_argument("--quiet", action="store_true", help="no progress bars or log echo")
     run.set_defaults(func=run_command)
 
@@ -33,12 +39,16 @@ def add_parser(subparsers) -> None:
         description="Compute the FTIR spectra of every pixel for the configured ground truth, "
         "as a run measures them (sections [data] and [noise]: by default on the truth's own "
         "grid with more sub-rays and a finer line-by-line step, plus NESR noise), and write "
-        "them (spectra.npz: radiance and its noise sigma [W/(m2 sr cm-1)] per pixel and "
-        "output wavenumber) with a figure of one spectrum and the band-integrated camera "
-        "images.")
+        "them as a measurement file (NetCDF: radiance (camera, v, u, wavenumber) "
+        "[W/(m2 sr cm-1)], wavenumbers [cm-1], cameras, instrument, noise, mask and provenance; "
+        "see invflame.measurement_file; '[data] source' of 'invflame run' reads it) with a "
+        "figure of one spectrum and the band-integrated camera images. --out FOLDER writes "
+        "measurement.nc, spectra.npz and simulated.png into it; --out FILE.nc writes that "
+        "file and FILE.png beside it.")
     simulate.add_argument("config", type=Path, help=CONFIG_HELP)
-    simulate.add_argument("--out", type=Path, default=Path("results/simulate"),
-                          help="output folder (default results/simulate)")
+    simulate.add_argument("--out", type=simulation_output, default="results/simulate",
+                          help="output folder, or a measurement file ending in .nc (default "
+                          "results/simulate)")
     simulate.set_defaults(func=simulate_command)
 
     plot = subparsers.add_parser(
@@ -49,15 +59,35 @@ def add_parser(subparsers) -> None:
     plot.set_defaults(func=plot_command)
 
 
+def simulation_output(text: str) -> Path:
+    """``invflame simulate --out``: a measurement file ``*.nc`` (in a folder that can be
+    written) or an output folder."""
+    path = Path(text)
+    if path.suffix == ".nc":
+        if path.is_dir():
+            raise argparse.ArgumentTypeError(f"{path} is a folder: give a file name ending in "
+                                             ".nc or a folder without the suffix")
+        arguments.folder(str(path.parent))
+        return path
+    return arguments.folder(text)
+
+
 def run_command(args: argparse.Namespace) -> int:
     """``invflame run``."""
     from invflame.experiments.figures import comparison_figures
     from invflame.experiments.runner import run_experiment
 
+    if args.force and not args.resume:
+        raise ConfigError("--force only applies to --resume (continue a changed run anyway): "
+                          "add --resume, or drop --force")
     summary = run_experiment(configuration.load(args.config), args.out, resume=args.resume,
-                             progress=not args.quiet)
-    comparison_figures(args.out, {"reconstruction": args.out})
-    print(f"normalized MSE: {summary['mse']}; results in {args.out}")
+                             progress=not args.quiet, force=args.force)
+    if "mse" in summary:  # scored against a ground truth
+        comparison_figures(args.out, {"reconstruction": args.out})
+        print(f"normalized MSE: {summary['mse']}; results in {args.out}")
+    else:
+        print(f"chi2/M {summary['chi2_per_measurement']['final']:.4g} (no ground truth); "
+              f"results in {args.out}")
     return 0
 
 
@@ -68,15 +98,26 @@ def simulate_command(args: argparse.Namespace) -> int:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from invflame.atomic_files import write_npz
+    from invflame.atomic_files import write_atomic, write_npz
+    from invflame.errors import ConfigError
     from invflame.experiments.runner import build_scene, load_truth, measure
+    from invflame.measurement_file import MeasurementFile, write_measurement
 
     cfg = configuration.load(args.config)
+    if cfg["data"]["source"]:
+        raise ConfigError(f"{args.config}: 'data.source' names measured data; invflame simulate "
+                          "makes data from the [truth]: remove 'data.source'")
     scene = build_scene(cfg)
     measurement = measure(cfg, scene, load_truth(cfg))
     spectra = measurement.data
-    write_npz(args.out / "spectra.npz", radiance=spectra, sigma=measurement.sigma,
-              out_wavenumber=scene.out_wavenumber)
+    if args.out.suffix == ".nc":
+        written = [args.out, args.out.with_suffix(".png")]
+    else:
+        written = [args.out / "measurement.nc", args.out / "simulated.png",
+                   write_npz(args.out / "spectra.npz", radiance=spectra, sigma=measurement.sigma,
+                             out_wavenumber=scene.out_wavenumber)]
+    write_measurement(MeasurementFile(measurement, scene.rig, scene.out_wavenumber,
+                                      scene.resolution), written[0])
     images = scene.to_images(spectra.sum(axis=1) * (scene.out_wavenumber[1]
                                                     - scene.out_wavenumber[0]))
     fig, axes = plt.subplots(1, len(images) + 1, figsize=(4 * (len(images) + 1), 3.6))
@@ -88,11 +129,12 @@ def simulate_command(args: argparse.Namespace) -> int:
         shown = ax.imshow(image, cmap="inferno", vmin=0, vmax=images.max())
         ax.set(title=f"camera {i + 1}", xticks=[], yticks=[])
     fig.colorbar(shown, ax=axes[1:], label="band radiance [W/(m²·sr)]")
-    fig.savefig(args.out / "simulated.png", dpi=130, bbox_inches="tight")
+    write_atomic(written[1], lambda handle: fig.savefig(handle, format="png", dpi=130,
+                                                        bbox_inches="tight"))
     plt.close(fig)
     print(f"{spectra.shape[0]} spectra of {spectra.shape[1]} points "
           f"({'noisy' if measurement.noisy else 'noise-free'}: {measurement.provenance}); wrote "
-          f"{args.out / 'spectra.npz'} and {args.out / 'simulated.png'}")
+          + ", ".join(map(str, written)))
     return 0
 
 

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 import numpy as np
+
+from invflame.cli import arguments
+from invflame.errors import ConfigError
 
 
 def add_parser(subparsers) -> None:
@@ -23,25 +25,29 @@ def add_parser(subparsers) -> None:
         "temperatures. Bottom: radiance of a homogeneous slab, I = B(T)(1 - exp(-kappa L)), "
         "line by line and convolved with the FTIR lineshape (triangular apodization, sinc^2).",
     )
-    plot.add_argument("--out", type=Path, required=True, help="output PNG file")
+    plot.add_argument("--out", type=arguments.png, required=True,
+                      help="output PNG file (.png is added to a name without a suffix)")
     plot.add_argument(
-        "--temperatures", type=float, nargs="+", default=[300.0, 1000.0, 1500.0],
+        "--temperatures", type=arguments.positive, nargs="+", default=[300.0, 1000.0, 1500.0],
         help="temperatures of the cross-section curves, K (default 300 1000 1500)",
     )
     plot.add_argument(
-        "--slab-temperature", type=float, default=1300.0, help="slab temperature, K (default 1300)"
+        "--slab-temperature", type=arguments.positive, default=1300.0,
+        help="slab temperature, K (default 1300)",
     )
     plot.add_argument(
-        "--length", type=float, default=0.1, help="slab thickness, m (default 0.1)"
+        "--length", type=arguments.positive, default=0.1, help="slab thickness, m (default 0.1)"
     )
     plot.add_argument(
-        "--x-co2", type=float, default=0.1, help="CO2 mole fraction of the slab (default 0.1)"
+        "--x-co2", type=arguments.fraction, default=0.1,
+        help="CO2 mole fraction of the slab (default 0.1)",
     )
     plot.add_argument(
-        "--x-h2o", type=float, default=0.2, help="H2O mole fraction of the slab (default 0.2)"
+        "--x-h2o", type=arguments.fraction, default=0.2,
+        help="H2O mole fraction of the slab (default 0.2)",
     )
     plot.add_argument(
-        "--resolution", type=float, default=8.0,
+        "--resolution", type=arguments.positive, default=8.0,
         help="instrument resolution 1/MOPD, cm-1 (default 8)",
     )
     plot.set_defaults(func=run)
@@ -77,7 +83,16 @@ def run(args: argparse.Namespace) -> int:
     from operators.ils import ILSConvolution
     from operators.planck import planck
 
+    if args.x_co2 + args.x_h2o > 1.0:
+        raise ConfigError(f"--x-co2 {args.x_co2:g} plus --x-h2o {args.x_h2o:g} exceed 1: mole "
+                          "fractions of one gas sum to at most 1")
     table = AbsorptionTable.default()
+    lo, hi = table.temperatures[[0, -1]]
+    for name, value in [("--temperatures", t) for t in args.temperatures] + [
+            ("--slab-temperature", args.slab_temperature)]:
+        if not lo <= value <= hi:
+            raise ConfigError(f"{name} {value:g} K lies outside the absorption table's "
+                              f"{lo:g}-{hi:g} K")
     eta = table.wavenumber
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(10, 8), sharex=True)
     colors = plt.get_cmap("plasma")(np.linspace(0.0, 0.8, len(args.temperatures)))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from invflame.cli import arguments
 from invflame.field import Field
 from invflame.geometry import VoxelGrid
 from invflame.phantoms import PHANTOMS, make_phantom
@@ -46,13 +47,14 @@ def add_parser(subparsers) -> None:
     )
     write.add_argument("name", choices=sorted(PHANTOMS), help="phantom name")
     write.add_argument("--out", type=Path, required=True, help="output field .npz (overwritten)")
-    write.add_argument("--n", type=int, default=None, help="voxels per axis (default: native)")
+    write.add_argument("--n", type=arguments.count, default=None,
+                       help="voxels per axis (default: native)")
     write.add_argument(
         "--seed", type=int, default=None, help="seed of the synthetic plume's perturbation"
     )
     write.add_argument(
         "--perturbation",
-        type=float,
+        type=arguments.amplitude,
         default=None,
         help="relative puffing/turbulence amplitude of the synthetic plume in [0, 1) "
         "(needs --seed; default 0, the smooth plume)",

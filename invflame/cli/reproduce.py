@@ -12,6 +12,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from invflame.cli import arguments
+
 
 def add_parser(subparsers) -> None:
     """Register ``invflame reproduce`` and ``invflame study``."""
@@ -46,7 +48,7 @@ def _add_common(parser: argparse.ArgumentParser, default_out: str) -> None:
                         help="ground truth: 'poolfire' (the packaged OpenFOAM pool fire, "
                         "default), 'synthetic' (a McCaffrey plume) or a field .npz file (e.g. "
                         "from 'invflame phantom from-openfoam')")
-    parser.add_argument("--out", type=Path, default=Path(default_out),
+    parser.add_argument("--out", type=arguments.folder, default=default_out,
                         help=f"output folder (default {default_out})")
     parser.add_argument("--resume", action="store_true",
                         help="keep finished methods, continue interrupted ones")

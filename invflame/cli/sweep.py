@@ -20,6 +20,7 @@ import sys
 import tomllib
 from pathlib import Path
 
+from invflame.cli import arguments
 from invflame.cli.experiment import CONFIG_HELP
 from invflame.cli.reproduce import add_cluster_arguments
 
@@ -39,7 +40,7 @@ def add_parser(subparsers) -> None:
                         "solver.name, solver.options.lr) and its values, comma-separated; "
                         "values are read as TOML (1e-3, 20, true, [0.9, 0.99]) or else as "
                         "text; repeat --param for more keys")
-    parser.add_argument("--out", type=Path, default=Path("results/sweep"),
+    parser.add_argument("--out", type=arguments.folder, default="results/sweep",
                         help="output folder (default results/sweep)")
     parser.add_argument("--resume", action="store_true",
                         help="keep finished runs, continue interrupted ones")

@@ -181,13 +181,13 @@ def lean_branch(temperature_rise_st: float = DEFAULT_TEMPERATURE_RISE_ST, ambien
 
 
 def channel_emission(scene, states, length: float | None = None) -> np.ndarray:
-    """Band emission of gas states per output channel, as the instrument sees it.
+    r"""Band emission of gas states per output channel, as the instrument sees it.
 
     Thin limit (``length`` None): the emission density
-    :math:`\\sum_i K_{ji}\\, \\kappa(\\eta_i)\\, B(\\eta_i, T)` with :math:`K` the scene's
-    lineshape matrix (``scene.ils.matrix``), :math:`\\kappa` from the scene's absorption table
+    :math:`\sum_i K_{ji}\, \kappa(\eta_i)\, B(\eta_i, T)` with :math:`K` the scene's
+    lineshape matrix (``scene.ils.matrix``), :math:`\kappa` from the scene's absorption table
     and :math:`B` Planck's law. With ``length`` :math:`L`: the radiance of a uniform column of
-    that length per unit length, :math:`\\sum_i K_{ji}\\, B\\,(1 - e^{-\\kappa L}) / L`,
+    that length per unit length, :math:`\sum_i K_{ji}\, B\,(1 - e^{-\kappa L}) / L`,
     which self-absorption keeps below the thin limit.
 
     Parameters
@@ -293,17 +293,17 @@ def thin_channels(scene, band_peak: float, states,
 
 @dataclass(frozen=True)
 class BandTomography:
-    """Result of :func:`band_tomography`.
+    r"""Result of :func:`band_tomography`.
 
     Attributes
     ----------
     emission : ndarray, shape (nx, ny, nz)
         Emission density beyond ambient air, W/(m³·sr), ≥ 0.
     smoothing : float
-        The weight μ used (dimensionless, relative to :math:`\\lambda_0`, see
+        The weight μ used (dimensionless, relative to :math:`\lambda_0`, see
         :func:`band_tomography`).
     chi2 : float
-        Misfit :math:`\\chi^2` at the solution: whitened by the band noise when known
+        Misfit :math:`\chi^2` at the solution: whitened by the band noise when known
         (≈ the number of pixels at the noise level), else the plain sum of squares in
         (W/(m²·sr))².
     choice : solvers.ParameterChoice or None

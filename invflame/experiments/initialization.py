@@ -10,10 +10,10 @@ AMBIENT = np.array([300.0, 4.2e-4, 0.01, 0.0])
 
 def noisy_truth(truth: np.ndarray, noise: float, seed: int,
                 temperature_range=(250.0, 2500.0)) -> np.ndarray:
-    """The paper's initialization: the ground truth plus Gaussian noise.
+    r"""The paper's initialization: the ground truth plus Gaussian noise.
 
-    :math:`f_0 = f_\\text{true} + \\text{noise}\\,(\\max f_\\text{true} - \\min
-    f_\\text{true})\\,\\epsilon`, :math:`\\epsilon \\sim \\mathcal{N}(0, 1)` independently per
+    :math:`f_0 = f_\text{true} + \text{noise}\,(\max f_\text{true} - \min
+    f_\text{true})\,\epsilon`, :math:`\epsilon \sim \mathcal{N}(0, 1)` independently per
     voxel and field, then clipped to the physical bounds (T in ``temperature_range`` K,
     0 ≤ X ≤ 1). The noise is relative to each field's range, i.e. 20 % on the min–max
     normalized fields on which the paper reports MSE. Clipping at the bounds removes much of

@@ -49,10 +49,12 @@ class Measurement:
     Attributes
     ----------
     data : ndarray, shape (n_rays, n_out)
-        Spectra per pixel in W/(m²·sr·cm⁻¹).
-    sigma : ndarray, shape (n_out,)
-        Noise standard deviation per output wavenumber in W/(m²·sr·cm⁻¹) (ones for
-        noise-free data, so that a whitened misfit is the plain sum of squares).
+        Spectra per pixel in W/(m²·sr·cm⁻¹) (0 where masked).
+    sigma : ndarray, shape (n_out,) or (n_rays, n_out)
+        Noise standard deviation per output wavenumber, or per value, in W/(m²·sr·cm⁻¹)
+        (ones for noise-free data, so that a whitened misfit is the plain sum of squares);
+        ``inf`` for a masked value (a bad pixel or wavenumber: weight 0 in the data term, see
+        :mod:`invflame.measurement_file`).
     noisy : bool
         Whether noise was added (False: ``sigma`` carries no information).
     provenance : dict
@@ -66,8 +68,8 @@ class Measurement:
 
     @property
     def n_measurements(self) -> int:
-        """Number of measured values M (pixels × output wavenumbers)."""
-        return int(self.data.size)
+        """Number of measured values M (pixels × output wavenumbers), masked ones left out."""
+        return int(np.count_nonzero(np.isfinite(np.broadcast_to(self.sigma, self.data.shape))))
 
 
 def read_nesr(path, out_wavenumber) -> np.ndarray:
@@ -139,7 +141,10 @@ def add_noise(clean: np.ndarray, sigma, seed: int) -> np.ndarray:
     seed : int
         Seed of the noise.
     """
-    sigma = 1.0 / noise_weights(sigma, clean.shape)  # checked: broadcastable, finite, > 0
+    sigma = 1.0 / noise_weights(sigma, clean.shape)  # checked: broadcastable, > 0
+    if not np.all(np.isfinite(sigma)):
+        raise ValueError("sigma (noise standard deviation, W/(m2 sr cm-1)) must be finite and "
+                         "positive to draw noise; got inf")
     noise = sigma * np.random.default_rng(seed).standard_normal(clean.shape)
     return (clean + noise).astype(clean.dtype)
 

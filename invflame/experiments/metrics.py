@@ -12,10 +12,10 @@ FIELD_NAMES = ("T", "CO2", "H2O", "CH4")
 
 
 def normalized_mse(truth: np.ndarray, estimate: np.ndarray, spans=None) -> dict[str, float]:
-    """Mean squared error per field at voxel centres, each field min–max normalized.
+    r"""Mean squared error per field at voxel centres, each field min–max normalized.
 
     Both fields are mapped with the ground truth's range,
-    :math:`\\hat f = (f - \\min f_\\text{true}) / (\\max f_\\text{true} - \\min f_\\text{true})`,
+    :math:`\hat f = (f - \min f_\text{true}) / (\max f_\text{true} - \min f_\text{true})`,
     as in the paper's Table 1.
 
     Parameters

@@ -60,22 +60,22 @@ METHODS = {
     "VG/NR": ("voxel", "none"),
     "VG/Tikh.": ("voxel", "tikhonov"),
     "VG/TV": ("voxel", "tv"),
-    "NN/NR": ("neural", "none"),
-    "NN/Tikh.": ("neural", "tikhonov"),
-    "NN/TV": ("neural", "tv"),
+    "NN/NR": ("neural-field", "none"),
+    "NN/Tikh.": ("neural-field", "tikhonov"),
+    "NN/TV": ("neural-field", "tv"),
 }
 """Method label → (representation kind, regularizer kind)."""
 
 SOLVERS = {
     "voxel": {"name": "adam", "options": {"lr": 0.01}},
-    "neural": {"name": "adam", "options": {"lr": 1e-3}},
+    "neural-field": {"name": "adam", "options": {"lr": 1e-3}},
 }
 """The optimizer of each representation under the paper's protocol (it trains both with Adam
 for a fixed number of epochs)."""
 
 HONEST_SOLVERS = {
     "voxel": {"name": "lbfgs", "options": {"rtol_loss": 1e-3, "loss_window": 10}},
-    "neural": {"name": "adam", "options": {"lr": 1e-3, "rtol_loss": 1e-3, "loss_window": 20}},
+    "neural-field": {"name": "adam", "options": {"lr": 1e-3, "rtol_loss": 1e-3, "loss_window": 20}},
 }
 """The optimizer of each representation under the honest protocol, with its convergence rule
 (a plateau, not a fixed budget). Voxels: L-BFGS-B (a deterministic problem: curvature pays),
@@ -84,10 +84,10 @@ pixel batches, as the paper trains it, stopped when it falls by less than 0.1 % 
 iterations (pixel batches)."""
 
 HONEST_LAMBDA = {"none": 0.0, "tikhonov": 1.0, "tv": 30.0}
-"""λ of the honest protocol per regularizer, on the noise-weighted scale
-(:math:`\\chi^2/M + \\lambda\\Phi`), chosen on the synthetic plume, never on the pool fire:
+r"""λ of the honest protocol per regularizer, on the noise-weighted scale
+(:math:`\chi^2/M + \lambda\Phi`), chosen on the synthetic plume, never on the pool fire:
 TV's is the best of a sweep over 3, 10, 30, 100 at the quick size (``docs/honest.md``);
-Tikhonov's makes :math:`\\lambda\\Phi` of the plume's true fields (Φ ≈ 13 m⁻², against
+Tikhonov's makes :math:`\lambda\Phi` of the plume's true fields (Φ ≈ 13 m⁻², against
 0.62 m⁻¹ for TV) of the same order as TV's. ``invflame run`` with ``lambda = "discrepancy"``
 chooses it from the data instead."""
 
@@ -101,9 +101,9 @@ PROTOCOLS = {
 
 PRESETS = {
     "paper": {"truth": {"grid": 60}, "rig": {"pixels": 32}, "spectrum": {"step": 0.04},
-              "epochs": 2000, "honest_epochs": {"voxel": 2000, "neural": 2000}},
+              "epochs": 2000, "honest_epochs": {"voxel": 2000, "neural-field": 2000}},
     "quick": {"truth": {"grid": 30}, "rig": {"pixels": 16}, "spectrum": {"step": 0.08},
-              "epochs": 200, "honest_epochs": {"voxel": 100, "neural": 30}},
+              "epochs": 200, "honest_epochs": {"voxel": 100, "neural-field": 30}},
 }
 """Problem sizes. ``epochs``: the paper protocol's fixed number of epochs (passes over all
 pixels); ``honest_epochs``: the honest protocol's limits per representation, which its

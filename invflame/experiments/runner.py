@@ -1,7 +1,8 @@
-"""One reconstruction from a configuration: scene, data, representation, solver, metrics, files.
+r"""One reconstruction from a configuration: scene, data, representation, solver, metrics, files.
 
 :func:`run_experiment` writes into its output folder
 
+====================== ======================================================================
 ``config.toml``        the complete configuration (defaults filled in) with its seed
 ``summary.json``       metrics (normalized MSE and PSNR per field, time per iteration, memory)
 ``history.csv``        per-iteration loss, data misfit, regularizer, gradient norm, wall time
@@ -10,10 +11,20 @@
 ``reconstruction.npz`` reconstructed fields
 ``data.npz``           measured and final simulated spectra, noise σ, output wavenumbers
 ``checkpoint.npz``     solver state every few iterations (``resume=True`` continues from it)
+``fingerprint.json``   content hashes of the truth and the measured data, the package version
+                       and the solver's options dataclass (:func:`run_fingerprint`)
 ``log.txt``            what happened, with timings
+``*.vti``              ``truth.vti``, ``start.vti``, ``reconstruction.vti``: the three field
+                       sets for ParaView (:mod:`invflame.export`)
+``fields.nc``          the three field sets for xarray
+====================== ======================================================================
 
 All files are written atomically. A finished run (``summary.json`` present) is not redone with
-``resume=True``; an interrupted one continues from its checkpoint.
+``resume=True``; an interrupted one continues from its checkpoint, unless its configuration,
+truth, data or code changed (:func:`check_resumable`, :func:`check_fingerprint`; ``force=True``
+continues anyway and records it). While a run writes its folder, the folder is locked
+(``.lock``, a second writer is refused) and holds ``INCOMPLETE``, removed when every output is
+written (:mod:`invflame.experiments.run_folder`).
 
 **Protocol.** By default the data are synthesized without the inverse crime and with FTIR
 noise (:mod:`invflame.experiments.measurement`), the start knows nothing of the truth
@@ -21,26 +32,29 @@ noise (:mod:`invflame.experiments.measurement`), the start knows nothing of the 
 records which start, data, noise and λ made the result, with the ray coverage.
 
 **Weighting** (``regularizer.scaling``). ``"chi2"`` (default): the objective is
-:math:`\\chi^2(\\theta)/M + \\lambda\\,\\Phi(\\theta)` with the noise-whitened misfit
-:math:`\\chi^2 = \\sum((F(\\theta) - d)/\\sigma)^2` over the :math:`M` measured values (≈ 1 per
-value at the noise level) and :math:`\\Phi` a mean over voxels, so λ keeps its meaning whatever
+:math:`\chi^2(\theta)/M + \lambda\,\Phi(\theta)` with the noise-whitened misfit
+:math:`\chi^2 = \sum((F(\theta) - d)/\sigma)^2` over the :math:`M` measured values (≈ 1 per
+value at the noise level) and :math:`\Phi` a mean over voxels, so λ keeps its meaning whatever
 the numbers of pixels, wavenumbers or voxels; solvers minimize :math:`M` times it. ``"paper"``:
 the study's reading, kept to reproduce it: the unweighted squared norm of each pixel's spectrum
-averaged over the pixels, :math:`\\frac{1}{R}\\|F(\\theta) - d\\|^2 + \\lambda \\Phi`, i.e. the
+averaged over the pixels, :math:`\frac{1}{R}\|F(\theta) - d\|^2 + \lambda \Phi`, i.e. the
 problem's weight is λ·R for R pixels (its meaning then changes with the grid, the pixels and
 the wavenumbers).
 """
 
 from __future__ import annotations
 
+import dataclasses
+import hashlib
+import importlib.metadata
 import time
 from pathlib import Path
 
 import numpy as np
 
-import operators as op
 import solvers
 from invflame.atomic_files import read_json, write_csv, write_json, write_npz, write_text
+from invflame.background import background_from_config
 from invflame.experiments import config as configuration
 from invflame.experiments.data_start import band_tomography_start
 from invflame.experiments.initialization import ambient, noisy_truth
@@ -50,17 +64,22 @@ from invflame.experiments.measurement import (
     synthesis_scene,
 )
 from invflame.experiments.metrics import field_scores, peak_memory_mb, psnr
+from invflame.experiments.run_folder import RunLock
+from invflame.export import export_run
 from invflame.field import Field
 from invflame.geometry import VoxelGrid, paper_rig, ray_coverage
+from invflame.geometry.rig_file import check_instrument
+from invflame.measurement_file import MeasurementFile, read_measurement
 from invflame.phantoms import make_phantom
-from invflame.representations.neural import NeuralFieldRepresentation
-from invflame.representations.neural_centres import NeuralCentresRepresentation
+from invflame.phantoms.plume import plume_soot
+from invflame.representations.neural import NeuralCentresRepresentation, NeuralFieldRepresentation
 from invflame.representations.normalization import physical_bounds
 from invflame.representations.voxel import VoxelRepresentation
 from invflame.scene import Scene
 from invflame.spectroscopy.absorption_table import AbsorptionTable, default_linelists
 
 CHECKPOINT_EVERY = 10
+FINGERPRINT = "fingerprint.json"
 
 
 class Log:
@@ -87,29 +106,74 @@ def absorption_table(cfg: dict, step: float | None = None) -> AbsorptionTable:
     step : float, optional
         Line-by-line step in cm⁻¹ (default ``spectrum.step``).
     """
-    spectrum = cfg["spectrum"]
-    step = spectrum["step"] if step is None else step
-    n = int(round((spectrum["max"] - spectrum["min"]) / step)) + 1
-    wavenumber = spectrum["min"] + step * np.arange(n)
+    wavenumber = configuration.line_by_line_grid(cfg["spectrum"], step)
     return AbsorptionTable.cached(default_linelists(wavenumber), wavenumber=wavenumber,
-                                  pressure=spectrum["pressure"])
+                                  pressure=cfg["spectrum"]["pressure"])
 
 
-def build_scene(cfg: dict, table: AbsorptionTable | None = None) -> Scene:
-    """The reconstruction scene of a configuration: grid, rig, sub-rays, table, instrument."""
+def build_scene(cfg: dict, table: AbsorptionTable | None = None,
+                measured: MeasurementFile | None = None) -> Scene:
+    """The reconstruction scene of a configuration: grid, rig, sub-rays, table, instrument,
+    background (``[background]``, :func:`invflame.background.background_from_config`).
+
+    Parameters
+    ----------
+    cfg : dict
+        Validated configuration.
+    table : AbsorptionTable, optional
+        Reuse an already loaded table (it must match ``cfg["spectrum"]``).
+    measured : MeasurementFile, optional
+        Measured data (:func:`read_data`): their wavenumbers (cm⁻¹) and resolution replace
+        ``[instrument]``, and their cameras are the rig when the configuration names none.
+
+    Raises
+    ------
+    InputDataError
+        If the rig's cameras state another resolution or window than the scene's.
+    """
     grid = VoxelGrid.poolfire(cfg["truth"]["grid"])
-    rig = paper_rig(grid, distance=cfg["rig"]["distance"], n_pixels=cfg["rig"]["pixels"],
-                    focal_length=cfg["rig"]["focal_length"])
+    spec = configuration.rig_spec(cfg)
+    if spec is not None:
+        rig = spec.rig
+    elif measured is not None:
+        rig = measured.rig
+    else:
+        rig = paper_rig(grid, distance=cfg["rig"]["distance"], n_pixels=cfg["rig"]["pixels"],
+                        focal_length=cfg["rig"]["focal_length"])
     table = absorption_table(cfg) if table is None else table
-    instrument = cfg["instrument"]
-    out = op.ils.default_output_grid(table.wavenumber, instrument["resolution"])
-    out = np.arange(out[0], out[-1] + 1e-9, instrument["sampling"])
-    return Scene(grid, rig, table, resolution=instrument["resolution"], out_wavenumber=out,
-                 rays_per_pixel=cfg["rig"]["rays_per_pixel"])
+    if measured is None:
+        resolution = cfg["instrument"]["resolution"]
+        out_wavenumber = configuration.output_grid(cfg, table.wavenumber)
+    else:
+        resolution, out_wavenumber = measured.resolution, measured.wavenumber
+        low, high = out_wavenumber.min(), out_wavenumber.max()
+        if low < table.wavenumber[0] or high > table.wavenumber[-1]:
+            raise configuration.ConfigError(f"'data.source' = {cfg['data']['source']!r} measures "
+                              f"{low:g}-{high:g} cm-1, outside the window 'spectrum.min'.."
+                              f"'spectrum.max' = {table.wavenumber[0]:g}-"
+                              f"{table.wavenumber[-1]:g} cm-1: widen the window")
+    if spec is not None:
+        check_instrument(spec, resolution, (table.wavenumber[0], table.wavenumber[-1]),
+                         "the measurement" if measured else "[instrument] and [spectrum]")
+    return Scene(grid, rig, table, resolution=resolution, out_wavenumber=out_wavenumber,
+                 rays_per_pixel=cfg["rig"]["rays_per_pixel"],
+                 background=background_from_config(cfg["background"]))
 
 
-def load_truth(cfg: dict, grid: VoxelGrid | None = None) -> Field:
-    """The ground truth named by ``truth.source``: a phantom name or a field ``.npz`` file.
+def read_data(cfg: dict) -> MeasurementFile | None:
+    """The measurement file of ``data.source`` (None when the data are simulated), checked
+    against the configuration's rig when it names one (``rig.file`` or ``rig.cameras``)."""
+    source = cfg["data"]["source"]
+    if not source:
+        return None
+    spec = configuration.rig_spec(cfg)
+    where = f"the rig file {cfg['rig']['file']}" if cfg["rig"]["file"] else "rig.cameras"
+    return read_measurement(source, rig=None if spec is None else spec.rig, rig_source=where)
+
+
+def load_truth(cfg: dict, grid: VoxelGrid | None = None) -> Field | None:
+    """The ground truth named by ``truth.source``: a phantom name or a field ``.npz`` file;
+    None for ``"none"`` (measured data without a truth).
 
     Parameters
     ----------
@@ -120,6 +184,8 @@ def load_truth(cfg: dict, grid: VoxelGrid | None = None) -> Field:
         the synthetic plume's default 60³ grid, a file's own grid).
     """
     source = cfg["truth"]["source"]
+    if source == "none":
+        return None
     if source in ("poolfire", "synthetic"):
         field = make_phantom(source)
     else:
@@ -149,10 +215,17 @@ def measure(cfg: dict, scene: Scene, truth: Field) -> Measurement:
         synthesis, truth = scene, truth.resample(scene.grid)
     else:
         table = absorption_table(cfg, cfg["spectrum"]["step"] / data["step_divisor"])
-        synthesis = synthesis_scene(scene, truth, table, data["rays_per_pixel"])
+        synthesis = synthesis_scene(scene, truth, table, data["rays_per_pixel"]
+                                    ).with_background(scene.background)
+    soot = cfg["truth"]["soot"]
+    if soot > 0:  # the data see soot; the reconstruction's scene models gas only
+        synthesis = synthesis.with_soot(plume_soot(truth, soot))
+    background = None if scene.background is None else scene.background.describe()
     return simulate_measurement(synthesis, truth, cfg["noise"], seed=cfg["seed"] + 1,
                                 provenance={"inverse_crime": data["inverse_crime"],
-                                            "truth": str(cfg["truth"]["source"])})
+                                            "truth": str(cfg["truth"]["source"]),
+                                            "background": background,
+                                            "soot_peak_volume_fraction": soot})
 
 
 def initial_fields(cfg: dict, truth: Field, scene: Scene, measurement: Measurement) -> np.ndarray:
@@ -162,6 +235,12 @@ def initial_fields(cfg: dict, truth: Field, scene: Scene, measurement: Measureme
     if init["kind"] == "ambient":
         return ambient(scene.grid.shape, init["ambient"])
     if init["kind"] == "band-tomography":
+        masked = measurement.data.size - measurement.n_measurements
+        if masked:
+            raise configuration.ConfigError(
+                f"'init.kind' = 'band-tomography' integrates every pixel over every wavenumber, "
+                f"but the measurement masks {masked} values (bad pixels or wavenumbers): start "
+                "from 'ambient' air instead")
         return band_tomography_start(scene, measurement.data,
                                      sigma=measurement.sigma if measurement.noisy else None,
                                      temperature_rise_st=init["temperature_rise"],
@@ -178,7 +257,9 @@ def protocol(cfg: dict, measurement: Measurement) -> dict[str, str]:
               "noisy-truth": f"ground truth + {init['noise']:g} relative Gaussian noise (the "
                              "paper's protocol: starts from the answer)"}
     record = measurement.provenance
-    if data["inverse_crime"]:
+    if data["source"]:
+        made = f"measured, read from {data['source']}"
+    elif data["inverse_crime"]:
         made = "inverse crime: the reconstruction's own grid, sub-rays and line-by-line step"
     else:
         made = (f"truth on its {'x'.join(map(str, record['grid']))} grid, "
@@ -187,6 +268,10 @@ def protocol(cfg: dict, measurement: Measurement) -> dict[str, str]:
     noise = cfg["noise"]
     if not measurement.noisy:
         said = "none (noise-free data)"
+    elif data["source"]:
+        sigma = measurement.sigma[np.isfinite(measurement.sigma)]
+        said = (f"from the file: sigma {sigma.min():.3g}-{sigma.max():.3g} W/(m2 sr cm-1); "
+                f"{measurement.data.size - measurement.n_measurements} masked values")
     elif noise["kind"] == "snr":
         said = f"Gaussian, peak SNR {noise['snr']:g}"
     else:
@@ -256,8 +341,8 @@ def make_representation(cfg: dict, scene: Scene):
     """The representation named by ``representation.kind`` on the scene."""
     settings, kind = cfg["representation"], cfg["representation"]["kind"]
     network = {"n_frequencies": settings["frequencies"], "hidden": settings["hidden"],
-               "depth": settings["layers"], "seed": cfg["seed"]}
-    if kind == "neural":
+               "depth": settings["depth"], "seed": cfg["seed"]}
+    if kind == "neural-field":
         return NeuralFieldRepresentation(scene, n_coarse=settings["coarse_samples"],
                                          n_fine=settings["fine_samples"],
                                          batch_rays=settings["rays_per_batch"], **network)
@@ -295,32 +380,138 @@ def _differences(a: dict, b: dict, where: str = "") -> list[str]:
     return out
 
 
-def check_resumable(cfg: dict, folder) -> None:
+def check_resumable(cfg: dict, folder, force: bool = False) -> list[str]:
     """Refuse to resume a run folder written under another configuration (a larger iteration
     limit is allowed: it continues the run).
+
+    Parameters
+    ----------
+    cfg : dict
+        Validated configuration of the resumed run.
+    folder : str or Path
+        The run folder.
+    force : bool, optional
+        Return the differences instead of refusing.
+
+    Returns
+    -------
+    list of str
+        Every changed key with its value there and now (empty when nothing changed).
 
     Raises
     ------
     ConfigError
-        Naming every key whose value differs from the folder's ``config.toml``.
+        Naming every key whose value differs from the folder's ``config.toml`` (unless
+        ``force``).
     """
     saved = Path(folder) / "config.toml"
     if not saved.is_file():
-        return
+        return []
     changed = [d for d in _differences(configuration.load(saved), cfg)
                if not d.startswith("solver.iterations:")]
-    if changed:
+    if changed and not force:
         raise configuration.ConfigError(
             f"cannot resume {Path(folder)}: it was run with another configuration ("
             + "; ".join(changed) + "); resume with the same configuration, or start a new "
-            "folder (or run without --resume to redo it)")
+            f"folder (or run without --resume to redo it){FORCE_HINT}")
+    return changed
+
+
+FORCE_HINT = "; --force (invflame run --resume --force) continues anyway and records it"
+
+
+def _content_hash(*arrays) -> str:
+    """SHA-256 of arrays' shapes, dtypes and bytes (hex)."""
+    digest = hashlib.sha256()
+    for array in arrays:
+        array = np.ascontiguousarray(array)
+        digest.update(f"{array.dtype.str}{array.shape}".encode())
+        digest.update(array.tobytes())
+    return digest.hexdigest()
+
+
+def run_fingerprint(cfg: dict, truth: Field | None, measurement: Measurement) -> dict:
+    """What defines a run beside its configuration, for :func:`check_fingerprint`.
+
+    Parameters
+    ----------
+    cfg : dict
+        Validated configuration (its solver's ``Options`` dataclass is described).
+    truth : Field or None
+        Ground truth on the reconstruction grid.
+    measurement : Measurement
+        Measured spectra and noise σ.
+
+    Returns
+    -------
+    dict
+        ``truth sha256`` and ``data sha256`` (content hashes of the truth's values and of the
+        measured spectra with σ), ``invflame version`` (the installed package's) and
+        ``solver options`` (the solver's options dataclass: each field with its type and
+        default).
+    """
+    options = solvers.get(cfg["solver"]["name"]).Options
+    return {
+        "truth sha256": None if truth is None else _content_hash(truth.values),
+        "data sha256": _content_hash(measurement.data, measurement.sigma),
+        "invflame version": importlib.metadata.version("invflame"),
+        "solver options": f"{options.__module__}.{options.__qualname__}("
+                          + ", ".join(f"{f.name}: {f.type} = {f.default!r}"
+                                      for f in dataclasses.fields(options)) + ")",
+    }
+
+
+def check_fingerprint(folder, fingerprint: dict, force: bool = False) -> list[str]:
+    """Refuse to resume a run folder whose data, truth or code changed since it was written.
+
+    Parameters
+    ----------
+    folder : str or Path
+        The run folder; its ``fingerprint.json`` is compared (a folder without one, written
+        before fingerprints were kept, has nothing to compare).
+    fingerprint : dict
+        :func:`run_fingerprint` of the resumed run.
+    force : bool, optional
+        Return the differences instead of refusing.
+
+    Returns
+    -------
+    list of str
+        Each changed entry with its value there and now.
+
+    Raises
+    ------
+    ConfigError
+        Naming each changed entry (unless ``force``).
+    """
+    saved = Path(folder) / FINGERPRINT
+    if not saved.is_file():
+        return []
+    changed = _differences(read_json(saved), fingerprint)
+    if changed and not force:
+        raise configuration.ConfigError(
+            f"cannot resume {Path(folder)}: what defines the run changed since it was written ("
+            + "; ".join(changed) + "); resume with the same truth, data and code, or start a "
+            f"new folder (or run without --resume to redo it){FORCE_HINT}")
+    return changed
 
 
 def chi2_per_value(simulated: np.ndarray, measurement: Measurement) -> float:
-    """Noise-weighted misfit per measured value, :math:`\\chi^2/M` (≈ 1 at the noise level;
-    the plain mean squared misfit in (W/(m²·sr·cm⁻¹))² for noise-free data)."""
+    r"""Noise-weighted misfit per measured value, :math:`\chi^2/M` (≈ 1 at the noise level;
+    the plain mean squared misfit in (W/(m²·sr·cm⁻¹))² for noise-free data); masked values
+    (σ = inf) left out."""
     residual = (simulated - measurement.data) / measurement.sigma
-    return float(np.mean(residual.astype(np.float64) ** 2))
+    return float(np.sum(residual.astype(np.float64) ** 2) / measurement.n_measurements)
+
+
+def truth_scores(truth: np.ndarray, fields: np.ndarray, start: np.ndarray) -> dict:
+    """The summary's scores against a ground truth (fields ``(4, nx, ny, nz)``: T in K, mole
+    fractions): those of :func:`~invflame.experiments.metrics.field_scores` for the result and,
+    suffixed ``_initial``, for the start, and the result's PSNR in dB."""
+    scores, initial = field_scores(truth, fields), field_scores(truth, start)
+    return {**scores, "mse_initial": initial["mse"], "mse_flame_initial": initial["mse_flame"],
+            "hot_volume_ratio_initial": initial["hot_volume_ratio"],
+            "psnr_db": psnr(truth, fields)}
 
 
 def _t_range(scene: Scene) -> tuple[float, float]:
@@ -330,7 +521,7 @@ def _t_range(scene: Scene) -> tuple[float, float]:
 def run_experiment(cfg: dict, out_dir, resume: bool = False, progress: bool = True,
                    table: AbsorptionTable | None = None,
                    measurement: Measurement | None = None,
-                   start: np.ndarray | None = None) -> dict:
+                   start: np.ndarray | None = None, force: bool = False) -> dict:
     """Run one reconstruction and write its outputs (see the module docstring).
 
     Parameters
@@ -351,45 +542,71 @@ def run_experiment(cfg: dict, out_dir, resume: bool = False, progress: bool = Tr
     start : ndarray, shape (4, nx, ny, nz), optional
         Reuse starting fields made by :func:`initial_fields` for this configuration and
         measurement.
+    force : bool, optional
+        With ``resume``: continue even if the configuration, the truth, the measured data or
+        the code changed since the folder was written (:func:`check_resumable`,
+        :func:`check_fingerprint`); the log and the summary's ``resumed`` entry record what
+        changed.
 
     Returns
     -------
     dict
-        The summary (also in ``summary.json``).
+        The summary (also in ``summary.json``); its ``resumed`` entry is None for a run done
+        in one go, else the iteration it continued from, whether the solver resumes exactly,
+        whether it was forced and what had changed.
     """
     solver = cfg["solver"]  # a bad solver name or option fails here, before any file is touched
     solvers.get(solver["name"])(max_iter=solver["iterations"], **solver["options"])
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    with RunLock(out) as lock:  # one writer at a time; INCOMPLETE until every output is written
+        summary = _write_run(cfg, out, resume, progress, table, measurement, start, force)
+        lock.complete()
+    return summary
+
+
+def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measurement,
+               start, force: bool = False) -> dict:
+    """The body of :func:`run_experiment`, in its locked output folder."""
+    solver = cfg["solver"]
     summary_path, checkpoint = out / "summary.json", out / "checkpoint.npz"
-    if resume:
-        check_resumable(cfg, out)
+    changed = check_resumable(cfg, out, force) if resume else []
     if resume and summary_path.is_file():
         return read_json(summary_path)
     if not resume:
-        for stale in (summary_path, checkpoint, out / "log.txt", out / "lambda_choice.json"):
+        for stale in (summary_path, checkpoint, out / "log.txt", out / "lambda_choice.json",
+                      out / FINGERPRINT):
             stale.unlink(missing_ok=True)
     log = Log(out / "log.txt", echo=progress)
     write_text(out / "config.toml", configuration.dumps(cfg))
 
-    scene = build_scene(cfg, table)
+    measured = read_data(cfg)
+    scene = build_scene(cfg, table, measured)
     native = load_truth(cfg)
-    truth = native.resample(scene.grid)
+    truth = None if native is None else native.resample(scene.grid)
     log(f"scene: grid {scene.grid.shape}, {scene.n_rays} pixels x {scene.rays_per_pixel} "
         f"sub-rays, {scene.wavenumber.size} line-by-line points -> "
         f"{scene.out_wavenumber.size} output points; truth {cfg['truth']['source']}")
     if measurement is None:
-        measurement = measure(cfg, scene, native)
+        measurement = measure(cfg, scene, native) if measured is None else measured.measurement
+    fingerprint = run_fingerprint(cfg, truth, measurement)
+    if resume:
+        changed += check_fingerprint(out, fingerprint, force)
+    if changed:
+        log("resumed with --force although what defines the run changed: " + "; ".join(changed))
+    write_json(out / FINGERPRINT, fingerprint)
     described = protocol(cfg, measurement)
     log("; ".join(f"{k}: {v}" for k, v in described.items()))
-    coverage = ray_coverage(scene.segments, scene.rig, truth.values[0])
+    coverage = ray_coverage(scene.segments, scene.rig, None if truth is None else truth.values[0])
     if start is None:
         start = initial_fields(cfg, truth, scene, measurement)
 
     representation = make_representation(cfg, scene)
     x0 = starting_parameters(cfg, representation, start, progress)
     start = physical_fields(scene, representation.fields(x0))
-    truth.save(out / "truth.npz")
+    if truth is None:
+        (out / "truth.npz").unlink(missing_ok=True)
+    else:
+        truth.save(out / "truth.npz")
     Field(scene.grid, start, {"source": "initial", "init": cfg["init"]}).save(
         out / "initial.npz")
     reg = dict(cfg["regularizer"])
@@ -411,6 +628,10 @@ def run_experiment(cfg: dict, out_dir, resume: bool = False, progress: bool = Tr
     if progress:
         callbacks.append(solvers.ProgressBar(desc=out.name))
     resume_from = checkpoint if resume and checkpoint.is_file() else None
+    resumed = None if resume_from is None else {
+        "from_iteration": solvers.load_checkpoint(checkpoint).meta["iteration"],
+        "exact": solvers.get(solver["name"]).exact_resume, "forced": bool(changed),
+        "changed": changed}
     log(f"solver {solver['name']} for at most {solver['iterations']} epochs"
         + (f" ({per_epoch} iterations each)" if per_epoch > 1 else "")
         + (f", resuming from {checkpoint.name}" if resume_from else ""))
@@ -431,31 +652,31 @@ def run_experiment(cfg: dict, out_dir, resume: bool = False, progress: bool = Tr
                                                                    strict=True)])
     times = np.asarray(history["time"])
     seconds = float(np.diff(times).mean()) if times.size > 1 else None
-    scores, initial = field_scores(truth.values, fields), field_scores(truth.values, start)
     summary = {
         "config": cfg,
         "protocol": described,
+        "resumed": resumed,
         "lambda": reg["lambda"],
         "coverage": coverage,
         "iterations": result.iterations,
         "epochs": result.iterations / per_epoch,
         "stop_reason": result.stop_reason,
-        "converged": not result.stop_reason.startswith(("max_iter", "time_budget")),
+        "converged": not result.stop_reason.startswith(("max_iter", "time_budget",
+                                                          "non-finite")),
         "loss": {"initial": history["loss"][0], "final": result.loss},
         "chi2_per_measurement": {"initial": chi2_per_value(scene.simulate(start), measurement),
                                  "final": chi2_per_value(simulated, measurement)},
-        **scores,
-        "mse_initial": initial["mse"],
-        "mse_flame_initial": initial["mse_flame"],
-        "hot_volume_ratio_initial": initial["hot_volume_ratio"],
-        "psnr_db": psnr(truth.values, fields),
+        **({} if truth is None else truth_scores(truth.values, fields, start)),
         "seconds_per_iteration": seconds,
         "seconds_per_epoch": None if seconds is None else seconds * per_epoch,
         "parameter_memory_mb": representation.parameter_bytes(result.x) / 1e6,
         "peak_memory_mb": peak_memory_mb(),
     }
     write_json(summary_path, summary)
-    log(f"MSE {summary['mse']} (start {summary['mse_initial']}); chi2/M "
-        f"{summary['chi2_per_measurement']['final']:.3g}; {result.iterations} iterations, "
+    export_run(out)
+    scored = (f"MSE {summary['mse']} (start {summary['mse_initial']}); " if truth is not None
+              else "no ground truth; ")
+    log(f"{scored}chi2/M {summary['chi2_per_measurement']['final']:.3g}; "
+        f"{result.iterations} iterations, "
         f"{'converged' if summary['converged'] else 'not converged'}")
     return summary

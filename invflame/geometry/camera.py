@@ -55,6 +55,10 @@ class PinholeCamera:
         Sensor ``(width, height)`` in m; width along the image columns (``right``).
     n_pixels : tuple of int
         Pixel counts ``(nu, nv)``: columns and rows. The image has shape ``(nv, nu)``.
+    principal_point : tuple of float, optional
+        Where the optical axis meets the sensor, ``(u, v)`` in pixels from the image's top-left
+        corner (the centre of pixel ``image[v, u]`` is at ``(u + 0.5, v + 0.5)``); default the
+        sensor's centre ``(nu / 2, nv / 2)``.
     """
 
     position: np.ndarray
@@ -63,6 +67,7 @@ class PinholeCamera:
     focal_length: float
     sensor_size: tuple[float, float]
     n_pixels: tuple[int, int]
+    principal_point: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         position = np.asarray(self.position, dtype=np.float64)
@@ -92,12 +97,21 @@ class PinholeCamera:
             isinstance(n, int | np.integer) and not isinstance(n, bool) and n > 0 for n in pixels
         ):
             raise ValueError(f"n_pixels must be two positive integers (nu, nv); got {pixels!r}")
+        centre = (pixels[0] / 2, pixels[1] / 2)
+        principal = centre if self.principal_point is None else tuple(self.principal_point)
+        if len(principal) != 2 or not all(
+            isinstance(c, int | float | np.number) and not isinstance(c, bool) and np.isfinite(c)
+            for c in principal
+        ):
+            raise ValueError(f"principal_point must be two finite numbers (u, v) in pixels; got "
+                             f"{self.principal_point!r}")
         for name, value in (("position", position), ("look_at", look_at), ("up", up)):
             value.setflags(write=False)
             object.__setattr__(self, name, value)
         object.__setattr__(self, "focal_length", float(self.focal_length))
         object.__setattr__(self, "sensor_size", sensor)
         object.__setattr__(self, "n_pixels", tuple(int(n) for n in pixels))
+        object.__setattr__(self, "principal_point", tuple(float(c) for c in principal))
 
     @classmethod
     def from_fov(
@@ -167,9 +181,10 @@ class PinholeCamera:
         k = subdivisions(rays_per_pixel)
         nu, nv = self.n_pixels
         w, h = self.sensor_size
+        cu, cv = self.principal_point
         sub = (np.arange(k) + 0.5) / k  # sub-ray offsets inside a pixel, in pixels
-        x = ((np.arange(nu)[:, None] + sub).ravel() / nu - 0.5) * w  # along right, m
-        y = (0.5 - (np.arange(nv)[:, None] + sub).ravel() / nv) * h  # along image_up, m
+        x = ((np.arange(nu)[:, None] + sub).ravel() / nu - cu / nu) * w  # along right, m
+        y = (cv / nv - (np.arange(nv)[:, None] + sub).ravel() / nv) * h  # along image_up, m
         yy, xx = np.meshgrid(y, x, indexing="ij")  # (nv k, nu k)
         # reorder (v, j, u, i) -> (v, u, j, i): the k x k sub-rays of a pixel are consecutive
         xx, yy = (a.reshape(nv, k, nu, k).transpose(0, 2, 1, 3).reshape(-1, 1) for a in (xx, yy))
@@ -200,9 +215,10 @@ class PinholeCamera:
         with np.errstate(divide="ignore", invalid="ignore"):
             scale = np.where(depth > 0, self.focal_length / depth, np.nan)
         nu, nv = self.n_pixels
+        cu, cv = self.principal_point
         w, h = self.sensor_size
-        u = (c[..., 0] * scale / w + 0.5) * nu
-        v = (0.5 - c[..., 1] * scale / h) * nv
+        u = (c[..., 0] * scale / w + cu / nu) * nu
+        v = (cv / nv - c[..., 1] * scale / h) * nv
         return u, v, depth
 
 

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from invflame.errors import GeometryError
 from invflame.geometry.camera import PinholeCamera, framing_sensor_size
 from invflame.geometry.grid import VoxelGrid
 
@@ -119,6 +120,11 @@ def paper_rig(
     centre = grid.centre
     up = np.eye(3)[grid.up_axis]
     horizontal = [a for a in range(3) if a != grid.up_axis]
+    reach = max(grid.extent[a] / 2 for a in horizontal)
+    if not distance > reach:
+        raise GeometryError(f"camera distance {distance:g} m puts the cameras inside the grid "
+                            f"(it reaches {reach:g} m from its centre on the horizontal axes): "
+                            f"use a distance above {reach:g} m (the paper's 1.5)")
     positions = [centre + sign * distance * np.eye(3)[a] for a in horizontal for sign in (1, -1)]
     corners = grid.corners()
     sensor = max(

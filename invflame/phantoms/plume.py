@@ -19,6 +19,11 @@ fuel-rich core above the pool adds ``Z`` up to 1 at the pool surface; gas and te
 follow complete combustion CH4 + 2 O2 + 7.52 N2 → CO2 + 2 H2O + 7.52 N2
 (:func:`~invflame.phantoms.composition.burke_schumann_methane`).
 
+Optional soot layer (:func:`plume_soot`): soot forms where fuel is hot, on the rich side of the
+flame sheet, so its volume fraction is taken proportional to the fuel's mole fraction times the
+temperature rise, scaled to a given peak. The plume itself, like the pool fire, is soot-free;
+the layer is a separate field for :class:`invflame.scene.Scene` (``soot=``).
+
 Optional perturbation: puffing, a travelling-wave modulation of the centreline rise at the
 frequency ``f = 1.5 / √D`` Hz (Cetegen & Ahmed, Combust. Flame 93, 1993), and turbulence, a
 smooth random factor (correlation length 0.05 m); both of relative amplitude ``perturbation``.
@@ -168,3 +173,38 @@ def synthetic_plume(
         "seed": seed,
     }
     return Field(grid, values, metadata)
+
+
+def plume_soot(field: Field, peak_volume_fraction: float) -> np.ndarray:
+    r"""A soot layer for a methane flame: :math:`f_v \propto X_\mathrm{CH_4} (T - T_0)`.
+
+    Soot forms where fuel meets heat, on the rich side of the flame sheet; this places it
+    there, scaled so that its largest value is ``peak_volume_fraction``.
+
+    Parameters
+    ----------
+    field : Field
+        A flame (T in K, mole fractions), e.g. :func:`synthetic_plume`; :math:`T_0` is its
+        lowest temperature.
+    peak_volume_fraction : float
+        The largest soot volume fraction (dimensionless, in [0, 1); lightly sooting flames
+        hold 1e-8 to 1e-6).
+
+    Returns
+    -------
+    ndarray, shape ``field.grid.shape``
+        Soot volume fraction per voxel (zero everywhere when the flame holds no hot fuel).
+
+    Raises
+    ------
+    ValueError
+        For a peak outside [0, 1).
+    """
+    if not 0 <= peak_volume_fraction < 1:
+        raise ValueError(f"peak_volume_fraction must lie in [0, 1), got {peak_volume_fraction!r}")
+    temperature, fuel = field.values[0], field.values[1 + SPECIES.index("CH4")]
+    sooting = fuel * (temperature - temperature.min())
+    largest = float(sooting.max())
+    if largest <= 0:
+        return np.zeros(field.grid.shape)
+    return peak_volume_fraction * sooting / largest

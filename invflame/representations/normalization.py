@@ -26,8 +26,18 @@ SCALES = np.array([1000.0, 0.1, 0.1, 0.1])
 """Reference scale per field: K for temperature, dimensionless for mole fractions."""
 
 
+def per_field(values, shape) -> np.ndarray:
+    """One value per field ``(4,)`` broadcast to fields of shape ``shape`` = ``(4, ...)``
+    (a read-only view), e.g. bounds or scales on a grid ``(4, nx, ny, nz)``."""
+    values = np.asarray(values)
+    if values.shape != (4,) or len(shape) < 1 or shape[0] != 4:
+        raise ValueError(f"per_field takes 4 values (T, CO2, H2O, CH4) and a fields shape "
+                         f"(4, ...); got values of shape {values.shape} and shape {shape}")
+    return np.broadcast_to(values.reshape((4,) + (1,) * (len(shape) - 1)), shape)
+
+
 def _scales(ndim: int) -> np.ndarray:
-    return SCALES.reshape((4,) + (1,) * (ndim - 1))
+    return per_field(SCALES, (4,) + (1,) * (ndim - 1))
 
 
 def normalize(fields: np.ndarray) -> np.ndarray:

@@ -11,21 +11,23 @@ from invflame.representations.normalization import (
     SCALES,
     denormalize,
     normalize,
+    per_field,
     physical_bounds,
 )
+from invflame.representations.protocol import Representation
 from invflame.representations.whitening import whitened
 
 REGULARIZERS = ("none", "tikhonov", "tv")
 
 
 def regularizer_for(kind: str, grid: VoxelGrid, n_fields: int = 4):
-    """The voxel regularizer Φ on normalized fields, as an ``operators.Composite`` or None.
+    r"""The voxel regularizer Φ on normalized fields, as an ``operators.Composite`` or None.
 
     Parameters
     ----------
     kind : {"none", "tikhonov", "tv"}
-        No regularizer, :math:`\\sum_d \\mathrm{mean}((D_d u)^2)` or
-        :math:`\\sum_d \\mathrm{mean}(|D_d u|)` with forward differences per metre.
+        No regularizer, :math:`\sum_d \mathrm{mean}((D_d u)^2)` or
+        :math:`\sum_d \mathrm{mean}(|D_d u|)` with forward differences per metre.
     grid : VoxelGrid
         Gives the shape and spacing (m).
     n_fields : int, optional
@@ -40,8 +42,8 @@ def regularizer_for(kind: str, grid: VoxelGrid, n_fields: int = 4):
     return make(dims, tuple(grid.spacing))
 
 
-class VoxelRepresentation:
-    """Normalized fields per voxel as the unknowns: :math:`\\theta = u = f / s` (see
+class VoxelRepresentation(Representation):
+    r"""Normalized fields per voxel as the unknowns: :math:`\theta = u = f / s` (see
     :mod:`invflame.representations.normalization`).
 
     Parameters
@@ -50,7 +52,7 @@ class VoxelRepresentation:
         Reconstruction grid.
     forward : operators.Operator
         Voxel forward map from physical fields ``(4, nx, ny, nz)`` (T in K, mole fractions) to
-        data, e.g. the scene's ``ILSConvolution @ EmissionRTE @ VoxelSampling``.
+        data, e.g. the scene's :attr:`~invflame.scene.Scene.operator`.
     temperature_range : tuple of float, optional
         Physical bounds on T in K (default 250–2500 K, the absorption table's range).
     """
@@ -66,11 +68,10 @@ class VoxelRepresentation:
                              f"{grid.shape} grid")
         self.grid = grid
         self.dims = dims
-        scales = np.broadcast_to(SCALES.reshape(4, 1, 1, 1), dims)
-        self.forward = forward @ op.Diagonal(scales, dtype=forward.dtype, name="denormalize")
-        lower, upper = physical_bounds(*temperature_range)
-        self.lower = np.broadcast_to(normalize(lower.reshape(4, 1, 1, 1)), dims)
-        self.upper = np.broadcast_to(normalize(upper.reshape(4, 1, 1, 1)), dims)
+        self.forward = forward @ op.Diagonal(per_field(SCALES, dims), dtype=forward.dtype,
+                                             name="denormalize")
+        self.lower, self.upper = (per_field(normalize(bound), dims)
+                                  for bound in physical_bounds(*temperature_range))
 
     def initial_parameters(self, fields) -> np.ndarray:
         """Parameters for physical fields ``(4, nx, ny, nz)``, clipped to the bounds."""
@@ -81,8 +82,8 @@ class VoxelRepresentation:
 
     def problem(self, data, regularizer: str = "none", lam: float = 1e-3,
                 x0=None, sigma=None) -> solvers.Problem:
-        """The inverse problem on voxel values: minimize
-        :math:`\\sum ((H(\\theta) - d)/\\sigma)^2 + \\lambda \\Phi(\\theta)`.
+        r"""The inverse problem on voxel values: minimize
+        :math:`\sum ((H(\theta) - d)/\sigma)^2 + \lambda \Phi(\theta)`.
 
         Parameters
         ----------
@@ -101,16 +102,11 @@ class VoxelRepresentation:
         forward, data = whitened(self.forward, data, sigma)
         return solvers.Problem(
             forward, data, regularizer=regularizer_for(regularizer, self.grid), lam=lam,
-            lower=self.lower, upper=self.upper, x0=x0, kind="voxel",
+            lower=self.lower, upper=self.upper, x0=x0,
             name=f"voxel/{regularizer}",
-            metadata={"representation": "voxel", "regularizer": regularizer, "lambda": lam},
+            metadata={"representation": self.kind, "regularizer": regularizer, "lambda": lam},
         )
 
     def fields(self, theta) -> np.ndarray:
         """Physical fields ``(4, nx, ny, nz)`` (T in K, mole fractions) at voxel centres."""
         return denormalize(np.asarray(theta).reshape(self.dims))
-
-    @staticmethod
-    def parameter_bytes(theta) -> int:
-        """Memory of the parameters in bytes."""
-        return int(np.asarray(theta).nbytes)

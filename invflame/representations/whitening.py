@@ -4,6 +4,9 @@ With independent Gaussian noise of standard deviation :math:`\sigma` per measure
 whitened misfit is the negative log-likelihood up to constants, and at a solution that fits the
 data to the noise it is close to the number of measurements :math:`M` (its expectation is
 :math:`M` for the true fields, with standard deviation :math:`\sqrt{2M}`).
+
+A value with :math:`\sigma = \infty` (a masked pixel or wavenumber of a measurement file,
+:mod:`invflame.measurement_file`) has weight 0: it drops out of the data term.
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ def noise_weights(sigma, data_shape) -> np.ndarray | None:
     ----------
     sigma : float or array_like, optional
         Noise standard deviation in W/(m²·sr·cm⁻¹): a scalar, per wavenumber ``(n_out,)`` or
-        per value ``data_shape``; all positive and finite.
+        per value ``data_shape``; all positive, ``inf`` for a masked value (weight 0).
     data_shape : tuple of int
         ``(n_rays, n_out)``.
     """
@@ -34,9 +37,9 @@ def noise_weights(sigma, data_shape) -> np.ndarray | None:
         raise ValueError(f"sigma of shape {sigma.shape} does not broadcast to the data shape "
                          f"{tuple(data_shape)}; give a scalar, one value per wavenumber or "
                          "one per measured value") from None
-    if not np.all(np.isfinite(sigma) & (sigma > 0)):
+    if not np.all(sigma > 0):  # NaN fails too; inf is a masked value
         raise ValueError("sigma (noise standard deviation, W/(m2 sr cm-1)) must be finite and "
-                         "positive everywhere")
+                         "positive everywhere, or inf for a masked value (weight 0)")
     return 1.0 / sigma
 
 

@@ -13,6 +13,7 @@ in m⁻¹ (the factor converts cm² to m²).
 from __future__ import annotations
 
 import hashlib
+import logging
 import os
 from dataclasses import dataclass, fields
 from importlib import resources
@@ -22,7 +23,8 @@ import numpy as np
 from scipy import constants
 from tqdm import tqdm
 
-from invflame.atomic_files import write_atomic
+from invflame.atomic_files import CorruptFileError, read_npz, write_atomic
+from invflame.errors import InputDataError
 from invflame.spectroscopy.cross_section import WING_CUTOFF, cross_section, default_wavenumber
 from invflame.spectroscopy.line_parameters import ATM
 from invflame.spectroscopy.linelist import LineList, read_par
@@ -43,6 +45,10 @@ DEFAULT_TEMPERATURES = np.round(np.linspace(250.0**-0.25, 2500.0**-0.25, 28) ** 
 #: Bump when the physics or the file layout changes: cached tables then rebuild.
 TABLE_VERSION = "1"
 H2O_PACKAGE_FILE = "H2O_HITRAN2012_600-800.par"
+#: The arrays of a saved table, in the order its content hash covers them.
+_ARRAYS = ("species", "wavenumber", "pressure", "temperatures", "sigma", "self_fraction")
+
+logger = logging.getLogger(__name__)
 
 
 def default_linelists(wavenumber=None) -> dict:
@@ -117,9 +123,19 @@ def table_key(linelists, species, wavenumber, temperatures, pressure, self_fract
     return digest.hexdigest()
 
 
+def _content_hash(arrays: dict) -> str:
+    """SHA-256 of a saved table's arrays (names, dtypes, shapes and bytes)."""
+    digest = hashlib.sha256()
+    for name in _ARRAYS:
+        array = np.ascontiguousarray(arrays[name])
+        digest.update(f"{name}|{array.dtype.str}|{array.shape}|".encode())
+        digest.update(array.tobytes())
+    return digest.hexdigest()
+
+
 @dataclass(frozen=True, eq=False)
 class AbsorptionTable:
-    """Cross-sections :math:`\\sigma_s(\\eta, T)` on temperature nodes, with their T spline.
+    r"""Cross-sections :math:`\sigma_s(\eta, T)` on temperature nodes, with their T spline.
 
     A species without lines has zero cross-section. In particular CH4 has no lines in the
     default table: its bands (ν4 near 1306 cm⁻¹, ν2 near 1533 cm⁻¹) lie outside 650–725 cm⁻¹,
@@ -211,6 +227,14 @@ class AbsorptionTable:
         species, wavenumber, temperatures, fractions = _resolve(
             linelists, species, wavenumber, temperatures, self_fraction
         )
+        reach = (wavenumber[0] - WING_CUTOFF, wavenumber[-1] + WING_CUTOFF)
+        if not any(np.any((lines.nu >= reach[0]) & (lines.nu <= reach[1]))
+                   for lines in linelists.values() if lines is not None):
+            raise InputDataError(
+                f"no line of {', '.join(sorted(linelists)) or 'any species'} lies within "
+                f"{WING_CUTOFF:g} cm-1 of the grid {wavenumber[0]:g}-{wavenumber[-1]:g} cm-1: the "
+                "window holds no absorption (the built-in lines cover 600-800 cm-1); choose "
+                "a window where the line lists have lines")
         sigma = np.zeros((temperatures.size, len(species), wavenumber.size))
         jobs = [
             (i, j, name)
@@ -239,7 +263,10 @@ class AbsorptionTable:
 
         Arguments as :meth:`build`. The cache file (in :func:`cache_dir`) is named by
         :func:`table_key`, a hash of the line data, grid, temperature nodes, pressure,
-        self-broadening fractions and :data:`TABLE_VERSION`.
+        self-broadening fractions and :data:`TABLE_VERSION`; it holds that key and a hash of
+        its own arrays. A cache file that is damaged (empty, truncated, garbage), holds
+        another key or fails its hash is rebuilt, with a warning naming it on the
+        ``invflame.spectroscopy.absorption_table`` logger.
         """
         species, wavenumber, temperatures, fractions = _resolve(
             linelists, species, wavenumber, temperatures, self_fraction
@@ -247,12 +274,15 @@ class AbsorptionTable:
         key = table_key(linelists, species, wavenumber, temperatures, pressure, fractions)
         path = cache_dir() / f"absorption-{key[:24]}.npz"
         if path.is_file():
-            return cls.load(path)
+            try:
+                return cls.load(path, key=key)
+            except (CorruptFileError, InputDataError) as err:
+                logger.warning("rebuilding the cached absorption table %s: %s", path, err)
         fractions = dict(zip(species, fractions, strict=True))
         table = cls.build(
             linelists, wavenumber, temperatures, pressure, species, fractions, progress
         )
-        table.save(path)
+        table.save(path, key=key)
         return table
 
     @classmethod
@@ -266,25 +296,61 @@ class AbsorptionTable:
 
     # ------------------------------------------------------------------ storage
 
-    def save(self, path) -> None:
-        """Write the table to an ``.npz`` file (atomic: temporary file, then rename)."""
+    def save(self, path, key: str = "") -> None:
+        """Write the table to an ``.npz`` file (atomic: temporary file, then rename).
+
+        Parameters
+        ----------
+        path : str or Path
+            Destination.
+        key : str, optional
+            The :func:`table_key` the table was built from, stored with it (the cache checks
+            it on :meth:`load`); a SHA-256 hash of the arrays is stored too.
+        """
         arrays = {"species": np.array(self.species), "wavenumber": self.wavenumber,
-                  "pressure": self.pressure, "temperatures": self.temperatures,
+                  "pressure": np.asarray(self.pressure), "temperatures": self.temperatures,
                   "sigma": self.sigma, "self_fraction": np.array(self.self_fraction)}
+        arrays["key"], arrays["content_hash"] = np.array(key), np.array(_content_hash(arrays))
         write_atomic(path, lambda stream: np.savez(stream, **arrays))
 
     @classmethod
-    def load(cls, path) -> AbsorptionTable:
-        """Read a table written by :meth:`save`."""
-        with np.load(path, allow_pickle=False) as data:
-            return cls(
-                species=tuple(data["species"].tolist()),
-                wavenumber=data["wavenumber"],
-                pressure=float(data["pressure"]),
-                temperatures=data["temperatures"],
-                sigma=data["sigma"],
-                self_fraction=tuple(data["self_fraction"].tolist()),
-            )
+    def load(cls, path, key: str | None = None) -> AbsorptionTable:
+        """Read a table written by :meth:`save`, checking its content hash.
+
+        Parameters
+        ----------
+        path : str or Path
+            The ``.npz`` file.
+        key : str, optional
+            The :func:`table_key` the file must hold (a cache lookup); default: any.
+
+        Raises
+        ------
+        CorruptFileError
+            If the file is empty, truncated or not an ``.npz`` archive.
+        InputDataError
+            If it lacks entries, its arrays fail the stored hash, or it holds another key.
+        """
+        fix = "delete it (a cached table is rebuilt on the next run)"
+        data = read_npz(path, "absorption table", fix)
+        missing = sorted(set(_ARRAYS) - set(data))
+        if missing:
+            raise InputDataError(f"absorption table {path} lacks {missing}; {fix}")
+        if "content_hash" in data and str(data["content_hash"]) != _content_hash(data):
+            raise InputDataError(f"absorption table {path} fails its content hash (the arrays "
+                                 f"were changed after it was written); {fix}")
+        if key is not None and str(data.get("key", "")) != key:
+            raise InputDataError(f"absorption table {path} was built from other inputs (key "
+                                 f"{str(data.get('key', ''))[:24] or 'none'}, expected "
+                                 f"{key[:24]}); {fix}")
+        return cls(
+            species=tuple(data["species"].tolist()),
+            wavenumber=data["wavenumber"],
+            pressure=float(data["pressure"]),
+            temperatures=data["temperatures"],
+            sigma=data["sigma"],
+            self_fraction=tuple(data["self_fraction"].tolist()),
+        )
 
     def as_arrays(self) -> dict:
         """Plain NumPy arrays for the emission operator.
@@ -365,10 +431,10 @@ class AbsorptionTable:
     def planck_mean_kappa(
         self, temperature, mole_fractions, pressure: float | None = None
     ) -> np.ndarray:
-        """Planck-mean absorption coefficient over the table's window, m⁻¹.
+        r"""Planck-mean absorption coefficient over the table's window, m⁻¹.
 
-        :math:`\\bar\\kappa = \\int B_\\eta(T)\\, \\kappa_\\eta\\, d\\eta / \\int B_\\eta(T)\\,
-        d\\eta` over the grid (a uniform grid, so sums replace the integrals). Arguments as
+        :math:`\bar\kappa = \int B_\eta(T)\, \kappa_\eta\, d\eta / \int B_\eta(T)\,
+        d\eta` over the grid (a uniform grid, so sums replace the integrals). Arguments as
         :meth:`kappa`; returns shape s.
         """
         kappa = self.kappa(temperature, mole_fractions, pressure)

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from invflame.atomic_files import write_atomic
+from invflame.errors import InputDataError
 
 RECORD_LENGTH = 160
 
@@ -43,6 +44,8 @@ _QUANTA = {
     "Q_upper": (98, 112),
     "Q_lower": (113, 127),
 }
+#: Fields that must not be negative (intensity, Einstein A, half widths, statistical weights).
+_NON_NEGATIVE = ("S296", "A", "gamma_air", "gamma_self", "g_upper", "g_lower")
 _ISO_COLUMN = 3
 # Isotopologue numbers above 9 are written as one character: 0 = 10, A = 11, B = 12, ...
 _ISO_CHARS = "123456789" + "0" + "ABCDEFGHIJKLMNOPQRSTUVWXYZ"
@@ -168,7 +171,7 @@ def _parse_numeric(
             try:
                 dtype(item.decode("ascii", errors="replace"))
             except ValueError:
-                raise ValueError(
+                raise InputDataError(
                     f"{path}: line {number}: field {name} (columns {first}-{last}) "
                     f"is not a valid {dtype.__name__}: {item.decode('ascii', errors='replace')!r}"
                 ) from None
@@ -183,7 +186,7 @@ def _parse_isotopologue(block: np.ndarray, path: Path, line_numbers: np.ndarray)
     iso = lookup[block[:, _ISO_COLUMN - 1]]
     bad = np.flatnonzero(iso == 0)
     if bad.size:
-        raise ValueError(
+        raise InputDataError(
             f"{path}: line {line_numbers[bad[0]]}: isotopologue code (column 3) must be one of "
             f"{_ISO_CHARS!r}, got {codes[bad[0]].decode('ascii', errors='replace')!r}"
         )
@@ -199,26 +202,50 @@ def _parse_block(block: np.ndarray, path: Path, line_numbers: np.ndarray, nu_ran
     for name in _NUMERIC:
         if name != "nu":
             columns[name] = _parse_numeric(block, name, path, line_numbers)
+        _check_values(columns[name], name, path, line_numbers)
     for name, (first, last) in _QUANTA.items():
         columns[name] = _columns(block, first, last).astype("U15")
     return columns
 
 
+def _check_values(values: np.ndarray, name: str, path: Path, line_numbers: np.ndarray) -> None:
+    """Refuse NaN or infinite numbers, and negative ones in :data:`_NON_NEGATIVE` fields."""
+    bad = ~np.isfinite(values) if values.dtype.kind == "f" else np.zeros(values.shape, bool)
+    if name in _NON_NEGATIVE:
+        bad |= values < 0
+    if bad.any():
+        first, last = _NUMERIC[name][:2]
+        i = int(np.flatnonzero(bad)[0])
+        allowed = "a finite number >= 0" if name in _NON_NEGATIVE else "a finite number"
+        raise InputDataError(
+            f"{path}: line {line_numbers[i]}: field {name} (columns {first}-{last}) must be "
+            f"{allowed}, got {float(values[i]):g} ({int(bad.sum())} such record(s) in this "
+            "chunk); fix or remove the record"
+        )
+
+
 def _chunk_to_block(lines: list[bytes], path: Path, first_line: int):
-    """Check record lengths; return the (n, 160) uint8 block and the 1-based line numbers."""
+    """Check record lengths and ASCII; return the (n, 160) uint8 block and 1-based line numbers."""
     records, numbers = [], []
     for offset, raw in enumerate(lines):
         record = raw.rstrip(b"\r\n")
         if not record.strip():
             continue
         if len(record) != RECORD_LENGTH:
-            raise ValueError(
+            raise InputDataError(
                 f"{path}: line {first_line + offset}: record has {len(record)} characters, "
                 f"expected {RECORD_LENGTH} (HITRAN 160-character format)"
             )
         records.append(record)
         numbers.append(first_line + offset)
     block = np.frombuffer(b"".join(records), dtype=np.uint8).reshape(len(records), RECORD_LENGTH)
+    non_ascii = np.argwhere(block > 127)
+    if non_ascii.size:
+        row, column = non_ascii[0]
+        raise InputDataError(
+            f"{path}: line {numbers[row]}: column {column + 1} holds the non-ASCII byte "
+            f"0x{block[row, column]:02x}; a .par record is 160 ASCII characters"
+        )
     return block, np.asarray(numbers, dtype=np.int64)
 
 

@@ -57,6 +57,13 @@ def test_fused_forward_equals_the_composed_operator(scene64):
     assert composed.max() > 0.01  # W/(m2 sr cm-1): the blob is seen
 
 
+def test_the_pieces_share_the_scene_tables_and_give_its_map(scene64):
+    fields = smooth_field(scene64.grid, seed=4)
+    assert scene64.emission.tables is scene64.tables
+    by_pieces = scene64.ils(scene64.emission(scene64.sampling(fields)))
+    np.testing.assert_allclose(scene64.operator(fields), by_pieces, rtol=1e-12)
+
+
 def test_fused_gradient_equals_the_operator_vjp(scene64):
     fields = smooth_field(scene64.grid, seed=1)
     w = np.random.default_rng(2).standard_normal(scene64.data_shape)

@@ -5,7 +5,7 @@ import numpy as np
 import pylops
 
 import operators as op
-from operators.jax_operator import JaxOperator
+from operators import JaxOperator
 
 RNG = np.random.default_rng(2)
 M = RNG.standard_normal((6, 4))
@@ -59,10 +59,10 @@ def test_gradient_taylor_test_for_a_scalar_objective():
 
 def test_dottest_detects_a_wrong_adjoint():
     class Broken(op.LinearOperator):
-        def _matvec(self, x):
+        def _forward(self, x):
             return M @ x
 
-        def _rmatvec(self, y):
+        def _adjoint(self, y):
             return 0.5 * M.T @ y
 
     bad = op.dottest(Broken((4,), (6,)))

@@ -51,3 +51,27 @@ def test_bad_grids_are_rejected():
         op.ILSConvolution(ETA, n_rays=1, out_wavenumber=[640.0])
     with pytest.raises(ValueError, match="narrower"):
         op.ILSConvolution(ETA[:100], n_rays=1)
+
+
+def test_irregular_measured_grid_passes_the_dot_test_and_keeps_flat_spectra():
+    rng = np.random.default_rng(3)
+    measured = np.sort(rng.uniform(662.0, 712.0, 17))  # a spectrometer's own, uneven samples
+    ils = op.ILSConvolution(ETA, n_rays=5, resolution=8.0, out_wavenumber=measured)
+    np.testing.assert_array_equal(ils.out_wavenumber, measured)
+    assert ils.dtype == np.float64 and op.dottest(ils, rtol=1e-10).passed
+    np.testing.assert_allclose(ils(np.full((5, ETA.size), 1.5)), 1.5, rtol=1e-12)
+    # a decreasing grid measures the same spectra, in its own order
+    reverse = op.ILSConvolution(ETA, n_rays=5, resolution=8.0, out_wavenumber=measured[::-1])
+    x = rng.standard_normal(ils.dims)
+    np.testing.assert_allclose(reverse(x), ils(x)[:, ::-1], rtol=1e-12, atol=1e-15)
+
+
+@pytest.mark.parametrize("grid, message", [
+    ([670.0, 680.0, 680.0, 690.0], "point 2 \\(680 cm-1\\)"),
+    ([670.0, 690.0, 680.0], "point 2 \\(680 cm-1\\)"),
+    ([670.0, np.nan], "finite"),
+    ([[670.0, 680.0]], "1-D"),
+])
+def test_measured_grids_that_are_not_monotone_are_named(grid, message):
+    with pytest.raises(ValueError, match=message):
+        op.ILSConvolution(ETA, n_rays=1, out_wavenumber=grid)

@@ -114,3 +114,15 @@ def test_bad_inputs_are_reported():
         emission_radiance(tables(), np.ones((3, 2, 4)), np.ones((2, 4)))
     with pytest.raises(ValueError, match="lengths must have shape"):
         emission_radiance(tables(), np.ones((4, 2, 4)), np.ones((2, 5)))
+
+
+def test_operator_from_prepared_tables_equals_the_one_from_splines():
+    fields, lengths = random_rays(n_rays=5, n_seg=7, seed=4)
+    prepared = tables(np.float64, "table")
+    rte = EmissionRTE.from_tables(prepared, lengths, batch_rays=2)
+    from_splines = EmissionRTE(ETA, NODES, COEF, lengths, P, np.float64, "table", batch_rays=2)
+    assert rte.tables is prepared and rte.dtype == np.float64 and rte.dims == from_splines.dims
+    np.testing.assert_array_equal(rte(fields), from_splines(fields))
+    np.testing.assert_array_equal(rte(fields), emission_radiance(prepared, fields, lengths, 2))
+    with pytest.raises(TypeError, match="RTETables.from_spline"):
+        EmissionRTE.from_tables(COEF, lengths)

@@ -69,7 +69,7 @@ def stochastic_problem(nonlinear_problem):
         jac = p.forward.linearize(x)
         r = np.zeros(rows)
         r[pick] = (jac.value - p.data)[pick]
-        return float(r @ r), 2 * jac.vjp(None, r)
+        return float(r @ r), 2 * jac.adjoint(r)
 
     return solvers.Problem(p.forward, p.data, x0=p.x0, value_and_grad=minibatch)
 

@@ -1,8 +1,11 @@
 """Gauss–Newton: fast local convergence on a zero-residual nonlinear problem."""
 
 import numpy as np
+import pylops
 
+import operators as op
 import solvers
+from solvers.gauss_newton import stacked_jacobian
 
 
 def test_gauss_newton_converges_quadratically(nonlinear_forward):
@@ -28,3 +31,22 @@ def test_gauss_newton_with_tikhonov_matches_a_first_order_solver(nonlinear_probl
     assert gn.iterations < 12, gn
     np.testing.assert_allclose(gn.x, reference.x, atol=1e-6)
     assert np.all(np.isfinite(gn.history["damping"][1:]))
+
+
+def test_stacked_jacobian_is_an_operator_of_the_algebra_and_passes_dot_tests(nonlinear_problem):
+    p = nonlinear_problem
+    x = np.linspace(-1, 1, 10)
+    ev = p.evaluate(x)
+    free = np.arange(10) % 3 != 0
+    for mask in (None, free):
+        A, residual = stacked_jacobian(p, ev, mask)
+        assert isinstance(A, op.LinearOperator)
+        assert op.dottest(A, rtol=1e-12).passed
+        assert pylops.utils.dottest(A, A.shape[0], A.shape[1], rtol=1e-12)
+        # the blocks: J_F and sqrt(lam c) I (Tikhonov on the identity), restricted to `mask`
+        v = np.random.default_rng(4).standard_normal(10)
+        kept = v if mask is None else v * mask
+        expected = np.concatenate([p.forward.jvp(x, kept), np.sqrt(1e-3) * kept])
+        np.testing.assert_allclose(A(v), expected, rtol=1e-12)
+        np.testing.assert_allclose(
+            residual, np.concatenate([p.forward(x) - p.data, np.sqrt(1e-3) * x]), rtol=1e-12)

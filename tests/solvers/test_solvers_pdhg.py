@@ -4,10 +4,12 @@ map and bounds."""
 import numpy as np
 import pylops
 import pyproximal
+import pytest
 from pyproximal.optimization.primaldual import PrimalDual
 
 import operators as op
 import solvers
+from solvers.pdhg import stacked_operator
 
 
 def test_pdhg_matches_pyproximal_primal_dual_on_tv_denoising():
@@ -20,7 +22,7 @@ def test_pdhg_matches_pyproximal_primal_dual_on_tv_denoising():
     grad = op.Gradient(dims)
     identity = op.aslinearoperator(pylops.Identity(dims), name="I")
     problem = solvers.Problem(identity, noisy, regularizer=(op.L1(), grad), lam=lam,
-                              x0=np.zeros(dims), kind="voxel")
+                              x0=np.zeros(dims))
     result = solvers.solve(problem, "pdhg", inner_iter=100, max_iter=50)
 
     # pyproximal: min_x sigma/2 ||x - b||^2 + lam ||grad x||_1 with sigma = 2 is our objective
@@ -65,3 +67,25 @@ def test_pdhg_refuses_a_composite_outer_functional(nonlinear_forward):
         assert "proximal map" in str(err)
     else:
         raise AssertionError("pdhg accepted a regularizer without a proximal map")
+
+
+def test_stacked_operator_is_an_operator_of_the_algebra_and_passes_dot_tests(numpy_forward):
+    diff = op.aslinearoperator(pylops.FirstDerivative(10, kind="forward", edge=False))
+    problem = solvers.Problem(numpy_forward, np.zeros(30), regularizer=(op.L1(), diff), lam=0.5)
+    x = np.random.default_rng(2).standard_normal(10)
+    ev = problem.evaluate(x)
+    for use_reg in (False, True):
+        A = stacked_operator(ev, use_reg)
+        assert isinstance(A, op.LinearOperator)
+        assert op.dottest(A, rtol=1e-12).passed
+        assert pylops.utils.dottest(A, A.shape[0], A.shape[1], rtol=1e-12)
+        v = np.random.default_rng(3).standard_normal(10)
+        blocks = A.combination.split(A(v))
+        np.testing.assert_allclose(blocks[0], numpy_forward.jvp(x, v), rtol=1e-12)
+        if use_reg:
+            np.testing.assert_allclose(blocks[1], np.append(np.diff(v), 0.0), rtol=1e-12,
+                                       atol=1e-15)
+        np.testing.assert_allclose(A.combination.join(blocks), A(v), rtol=0)
+    # the step sizes' norm estimate is the stack's spectral norm
+    dense = np.stack([A(e) for e in np.eye(10)], axis=1)
+    assert op.operator_norm(A, 300) == pytest.approx(np.linalg.norm(dense, 2), rel=1e-6)

@@ -40,6 +40,7 @@ def test_regularizer_accepts_composite_and_pair(nonlinear_forward):
     for reg in (op.Composite(op.L1(), diff), (op.L1(), diff), solvers.Regularizer(op.L1(), diff)):
         p = solvers.Problem(forward, np.zeros(8), regularizer=reg)
         assert p.regularizer(x) == pytest.approx(np.abs(np.diff(x)).sum())
+        assert type(p.regularizer) is op.Composite
 
 
 def test_bad_inputs_give_clear_errors(nonlinear_forward):
@@ -51,8 +52,8 @@ def test_bad_inputs_give_clear_errors(nonlinear_forward):
     with pytest.raises(ValueError, match=r"data hold 2 NaN or infinite values \(first at index "
                                          r"\(3,\)\)"):
         solvers.Problem(forward, np.array([0, 0, 0, np.nan, 0, np.inf, 0, 0.0]))
-    with pytest.raises(ValueError, match="kind must be one of generic, voxel"):
-        solvers.Problem(forward, np.zeros(8), kind="nerf")
+    with pytest.raises(TypeError, match="linearizable must be True or False, got 'no'"):
+        solvers.Problem(forward, np.zeros(8), linearizable="no")
     with pytest.raises(ValueError, match="x0 violates the bounds"):
         solvers.Problem(forward, np.zeros(8), lower=0.0, x0=-np.ones(4))
     with pytest.raises(ValueError, match="lower bound exceeds upper"):
@@ -74,12 +75,12 @@ def test_projection_and_projected_gradient(nonlinear_forward):
 
 
 @pytest.mark.parametrize("name", ["gauss-newton", "pdhg"])
-def test_second_order_and_primal_dual_solvers_refuse_a_full_neural_field(nonlinear_problem,
-                                                                           name):
+def test_second_order_and_primal_dual_solvers_refuse_a_problem_that_is_not_linearizable(
+        nonlinear_problem, name):
     p = nonlinear_problem
-    field = solvers.Problem(p.forward, p.data, x0=p.x0, kind="neural-field")
+    field = solvers.Problem(p.forward, p.data, x0=p.x0, linearizable=False)
     with pytest.raises(solvers.UnsupportedProblemError,
-                       match="voxel-centre neural reparameterization"):
+                       match=r"not linearizable.*First-order solvers \('adam'"):
         solvers.solve(field, name)
     solvers.solve(field, "adam", max_iter=2)  # first-order solvers accept it
 

@@ -27,7 +27,7 @@ def test_unknown_name_lists_known_ones_and_suggests_the_closest():
 def test_unknown_option_names_the_valid_ones():
     with pytest.raises(TypeError, match="no option 'learning_rate'.*lr, betas, eps"):
         solvers.get("adam")(learning_rate=0.1)
-    with pytest.raises(ValueError, match="lr > 0"):
+    with pytest.raises(ValueError, match="option 'lr' = -1.0 \\(float\\) must be > 0"):
         solvers.get("adam")(lr=-1.0)
     with pytest.raises(ValueError, match="max_iter"):
         solvers.get("gd")(max_iter=-3)
@@ -41,6 +41,9 @@ def test_register_adds_a_solver_and_refuses_a_taken_name(nonlinear_problem):
 
     try:
         assert "test-fixed-point" in solvers.available()
+        assert Stay.Options.solver == "test-fixed-point" and dict(Stay().options) == {}
+        with pytest.raises(TypeError, match="solver 'test-fixed-point' has no option 'lr'"):
+            Stay(lr=0.1)
         result = solvers.solve(nonlinear_problem, "test-fixed-point", max_iter=3)
         assert result.iterations == 3 and result.solver == "test-fixed-point"
         with pytest.raises(ValueError, match="already registered"):

@@ -1,6 +1,12 @@
 """Checkpoints and resume: an interrupted run, resumed, equals an uninterrupted one."""
 
+import importlib.util
 import io
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pylops
@@ -92,8 +98,16 @@ def test_resume_refuses_another_solver_or_other_options(nonlinear_problem, tmp_p
                   callbacks=[solvers.Checkpoint(path)])
     with pytest.raises(ValueError, match="written by solver 'adam'"):
         solvers.solve(nonlinear_problem, "gd", resume=path)
-    with pytest.raises(ValueError, match="other options.*'lr': \\(0.05, 0.1\\)"):
-        solvers.solve(nonlinear_problem, "adam", lr=0.1, resume=path)
+    assert solvers.load_checkpoint(path).meta["options"] == {"lr": 0.05, "betas": [0.9, 0.999],
+                                                            "eps": 1e-8}
+    with pytest.raises(ValueError, match="written with other options of solver 'adam' \\(betas: "
+                       r"\[0.9, 0.999\] in the checkpoint, \[0.5, 0.999\] now; lr: 0.05 in the "
+                       r"checkpoint, 0.1 now\); resume with the same options"):
+        solvers.solve(nonlinear_problem, "adam", lr=0.1, betas=(0.5, 0.999), resume=path)
+    # the same options, spelled as another type that converts to the same value
+    resumed = solvers.solve(nonlinear_problem, "adam", lr=0.05, betas=[0.9, 0.999], max_iter=3,
+                            resume=path)
+    assert resumed.iterations == 3
     with pytest.raises(FileNotFoundError, match="no checkpoint"):
         solvers.solve(nonlinear_problem, "adam", resume=tmp_path / "missing.npz")
 
@@ -122,3 +136,126 @@ def test_stopping_rules_and_callbacks(nonlinear_problem):
     result = solvers.solve(p, "adam", lr=0.05, max_iter=7, callbacks=[bar])
     assert "7/7" in stream.getvalue() and "loss=" in stream.getvalue()
     assert len(result.history) == 8 and result.history["iteration"][-1] == 7
+
+
+@pytest.mark.parametrize(("damage", "reason"), [
+    (lambda data: b"", "an empty file"),
+    (lambda data: data[: len(data) // 2], "bytes, unreadable"),
+    (lambda data: b"not a checkpoint at all" * 10, "bytes, unreadable"),
+])
+def test_a_damaged_checkpoint_is_named_with_what_to_do(nonlinear_problem, tmp_path, damage,
+                                                       reason):
+    path = tmp_path / "adam.npz"
+    solvers.solve(nonlinear_problem, "adam", lr=0.05, max_iter=2,
+                  callbacks=[solvers.Checkpoint(path)])
+    path.write_bytes(damage(path.read_bytes()))
+    with pytest.raises(solvers.atomic.CorruptFileError,
+                       match=f"checkpoint {path} is damaged or incomplete \\(.*{reason}.*\\); "
+                             "delete it and start the run again without resuming"):
+        solvers.solve(nonlinear_problem, "adam", lr=0.05, resume=path)
+
+
+def test_checkpoint_writers_use_their_own_temporary_files(tmp_path, monkeypatch):
+    import tempfile
+
+    from solvers.checkpoint import save_checkpoint
+
+    made = []
+    mkstemp = tempfile.mkstemp
+
+    def recording_mkstemp(*args, **kwargs):
+        made.append(mkstemp(*args, **kwargs))
+        return made[-1]
+
+    monkeypatch.setattr(tempfile, "mkstemp", recording_mkstemp)
+    path = tmp_path / "checkpoint.npz"
+    for value in (1.0, 2.0):
+        save_checkpoint(path, {"iteration": int(value)}, np.full(3, value), None, {})
+    names = [name for _, name in made]
+    assert len(set(names)) == 2 and all(name != str(path) + ".tmp" for name in names)
+    assert list(tmp_path.iterdir()) == [path]
+    np.testing.assert_array_equal(solvers.load_checkpoint(path).x, np.full(3, 2.0))
+
+
+def _kill_worker():
+    spec = importlib.util.spec_from_file_location("kill_worker",
+                                                  Path(__file__).with_name("kill_worker.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+WORKER = _kill_worker()
+KILL_RNG = np.random.default_rng(20261123)
+KILL_MODES = dict(zip(solvers.available(),
+                      np.resize(KILL_RNG.permutation(WORKER.MODES), len(solvers.available())),
+                      strict=True))
+"""A mode of death for each solver, every mode used (see ``kill_worker.py``)."""
+
+
+def _killed_run(name, path, iteration, mode):
+    """Run ``kill_worker.py`` until it kills itself with SIGKILL at ``iteration``."""
+    done = subprocess.run([sys.executable, WORKER.__file__, name, str(path), str(iteration),
+                           mode], capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "PYTHONWARNINGS": "ignore"})
+    assert done.returncode == -signal.SIGKILL, done.stderr
+    torn = [p.name for p in path.parent.iterdir() if p.name.endswith(".tmp")]
+    assert len(torn) == (mode == "mid-write"), torn  # a kill mid-write leaves its temporary
+
+
+def _kill_iteration(name, iterations, mode):
+    """A seeded random iteration to die at, after the first checkpoint and before the end."""
+    first = 2 if mode == "before-save" else 1
+    rng = np.random.default_rng([20261123, *name.encode()])
+    return int(rng.integers(first + (mode == "mid-write"), iterations))
+
+
+@pytest.mark.parametrize("name", EXACT)
+def test_a_run_killed_at_a_random_point_resumes_bit_for_bit(tmp_path, name):
+    """Every solver that resumes exactly: a process running it dies by SIGKILL at a random
+    iteration (after a checkpoint, before one, or halfway through writing one); the run resumed
+    from the checkpoint left behind equals the uninterrupted run bit for bit."""
+    solver, problem = WORKER.make_solver(name), WORKER.make_problem(name)
+    full = solver.run(problem, seed=WORKER.SEED)  # as WORKER.run; one solver keeps its jit
+    mode = KILL_MODES[name]
+    iteration = _kill_iteration(name, full.iterations, mode)
+    path = tmp_path / "run.npz"
+    _killed_run(name, path, iteration, mode)
+    saved = {"after-save": iteration, "before-save": iteration - iteration % 2,
+             "mid-write": iteration - 1}[mode]
+    assert solvers.load_checkpoint(path).meta["iteration"] == saved
+    resumed = solver.run(problem, resume=path)
+
+    assert resumed.iterations == full.iterations and resumed.seed == WORKER.SEED
+    assert resumed.stop_reason == full.stop_reason
+    np.testing.assert_array_equal(resumed.x, full.x)
+    for column in ("iteration", "loss", "misfit", "regularizer", "grad_norm"):
+        np.testing.assert_array_equal(resumed.history[column], full.history[column])
+
+
+def test_a_killed_scipy_lbfgs_run_resumes_to_the_same_minimum(tmp_path):
+    """SciPy's L-BFGS-B cannot resume exactly: it does not expose its memory of correction
+    pairs, so a resumed run restarts it at the checkpoint and takes other steps from there.
+    The history up to the checkpoint is kept bit for bit and the iteration count continues;
+    with SciPy's own tests off (``ftol = pgtol = 0``) both runs go on until the line search
+    can no longer lower the loss in float64, i.e. to the minimizer, so their final losses agree
+    to 1e-10 relative (the loss near a minimizer changes quadratically, far below that over
+    the distance between two such end points; float64 resolves 2e-16)."""
+    name = "lbfgs"
+    assert not solvers.get(name).exact_resume
+    solver, problem = WORKER.make_solver(name), WORKER.make_problem(name)
+    full = solver.run(problem, seed=WORKER.SEED)  # as WORKER.run; one solver keeps its jit
+    mode = KILL_MODES[name]
+    iteration = _kill_iteration(name, full.iterations, mode)
+    path = tmp_path / "run.npz"
+    _killed_run(name, path, iteration, mode)
+    saved = solvers.load_checkpoint(path).meta["iteration"]
+    resumed = solver.run(problem, resume=path)
+
+    for column in ("iteration", "loss", "misfit", "regularizer", "grad_norm"):
+        np.testing.assert_array_equal(resumed.history[column][:saved + 1],
+                                      full.history[column][:saved + 1])
+    np.testing.assert_array_equal(resumed.history["iteration"],
+                                  np.arange(resumed.iterations + 1))
+    assert resumed.iterations > saved
+    np.testing.assert_allclose(resumed.loss, full.loss, rtol=1e-10)

@@ -2,7 +2,7 @@
 
 import argparse
 
-from invflame.cli import co2
+from invflame.cli import co2, main
 from invflame.spectroscopy.linelist import read_par
 
 
@@ -22,6 +22,7 @@ def test_write_produces_par_file(tmp_path, capsys):
 
 
 def test_validate_reports_missing_reference(tmp_path, capsys):
-    args = _parse(["co2", "validate", "--reference", str(tmp_path / "missing.par")])
-    assert args.func(args) == 2
-    assert "not found" in capsys.readouterr().out
+    missing = tmp_path / "missing.par"
+    assert main(["co2", "validate", "--reference", str(missing)]) == 2
+    assert f"reference line file not found: {missing} (pass --reference PATH)" in \
+        capsys.readouterr().err

@@ -9,10 +9,10 @@ from invflame.experiments.metrics import normalized_mse, psnr
 
 def test_defaults_and_partial_override(tmp_path):
     path = tmp_path / "run.toml"
-    path.write_text('[solver]\nname = "gd"\noptions = { max_step = 0.5 }\n[regularizer]\n'
+    path.write_text('[solver]\nname = "gd"\noptions = { step = 0.5 }\n[regularizer]\n'
                     'kind = "tv"\n')
     cfg = config.load(path)
-    assert cfg["solver"]["name"] == "gd" and cfg["solver"]["options"] == {"max_step": 0.5}
+    assert cfg["solver"]["name"] == "gd" and cfg["solver"]["options"] == {"step": 0.5}
     assert cfg["regularizer"] == {"kind": "tv", "lambda": 1e-3, "scaling": "chi2",
                                   "lambda_range": [1e-3, 1e2], "tau": 1.0}
     assert cfg["rig"]["focal_length"] == 0.59
@@ -32,12 +32,52 @@ def test_defaults_and_partial_override(tmp_path):
         ("[init]\nambient = [300.0, 0.5, 0.6, 0.0]\n", r"'init.ambient' must be"),
         ("[init]\nambient = [300.0, 0.0]\n", r"'init.ambient' must be a list of 4 numbers"),
         ("[rig]\nrays_per_pixel = 8\n", r"'rig.rays_per_pixel' must be a perfect square"),
+        ("seed = -3\n", r"'seed' must be a non-negative integer, got -3"),
+        ("[solver]\noptions = { lr = '0.01' }\n",
+         r"'solver.options.lr' must be a number, got '0.01' \(write lr = 0.01 without quotes"),
+        ("[solver]\noptions = { max_iter = 5 }\n",
+         r"'solver.options.max_iter' clashes with 'solver.iterations'"),
+        ("[solver]\noptions = { lr = -1.0 }\n", r"'solver.options' = \{'lr': -1.0\}: .*lr"),
+        ("[solver]\nname = 'adamm'\n", r"'solver.name': .*Did you mean 'adam'"),
+        ("[spectrum]\nstep = 100\n", r"'spectrum.step' = 100.0 cm-1 must be at most half of "
+                                     r"'instrument.resolution' = 8.0"),
+        ("[instrument]\nsampling = 1000\n", r"'instrument.sampling' = 1000.0 cm-1 leaves 1 "
+                                            r"output point"),
+        ("[spectrum]\nmin = 660.0\nmax = 670.0\n",
+         r"narrower than twice the resolution 8 cm-1"),
+        ("[rig]\ndistance = 0.3\n",
+         r"'rig.distance' = 0.3: camera distance 0.3 m puts the cameras inside the grid"),
+        ("[init]\nnoise = 5\n", r"'init.noise' .* must be in \[0, 1\] .*got 5.0"),
+        ("[spectrum]\nmin = 900.0\nmax = 940.0\n",
+         r"'spectrum.min'..'spectrum.max' = 900-940 cm-1 holds no absorption line"),
+        ("[truth]\ngrid = 1\n", r"'truth.grid' must be at least 4 voxels per axis .*got 1"),
+        ("[spectrum]\nmax = nan\n", r"'spectrum.max' must be a finite number, got nan"),
+        ("[noise]\nnesr = 'no_such_nesr.txt'\n",
+         r"'noise.nesr' = 'no_such_nesr.txt' is neither a number nor an existing file"),
+        ("[rig]\ndistance = 0\n", r"'rig.distance' \(m\) must be a positive number, got 0.0; "
+                                r"the default is `distance = 1.5` in \[rig\]$"),
+        ("[regularizer]\ntau = 0\n", r"'regularizer.tau' must be positive: at least 1, got 0.0"),
+        ("[regularizer]\nlambda = 'discrepncy'\n",
+         r"'regularizer.lambda' = 'discrepncy' is not allowed \(did you mean 'discrepancy'\?\); "
+         r"allowed: a non-negative number or 'discrepancy'"),
+        ("[regularizer]\nlambda_range = [1e-3, inf]\n",
+         r"'regularizer.lambda_range' must be finite numbers, got \[0.001, inf\]"),
+        ("[data]\ninverse_crime = 1\n", r"'data.inverse_crime' must be true or false, got 1"),
+        ("[init]\nnoise = -0.1\n", r"'init.noise' \(fraction of each field's range\) must be in "
+                                 r"\[0, 1\] \(the paper's 0.2\), got -0.1"),
     ],
 )
 def test_errors_name_the_bad_key(tmp_path, text, message):
     path = tmp_path / "bad.toml"
     path.write_text(text)
     with pytest.raises(config.ConfigError, match=message):
+        config.load(path)
+
+
+def test_a_utf16_file_is_named(tmp_path):
+    path = tmp_path / "utf16.toml"
+    path.write_bytes("seed = 1\n".encode("utf-16"))
+    with pytest.raises(config.ConfigError, match=r"utf16.toml: not UTF-8 text"):
         config.load(path)
 
 

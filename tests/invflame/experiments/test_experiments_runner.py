@@ -156,13 +156,16 @@ def test_discrepancy_needs_the_noise_weighted_scale():
 def test_a_bad_solver_leaves_a_finished_run_untouched(tmp_path):
     runner.run_experiment(tiny(), tmp_path, progress=False)
     before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
-    bad = tiny(solver={"name": "Adam", "iterations": 2, "options": {}})
+    bad = {"name": "Adam", "iterations": 2, "options": {}}
+    with pytest.raises(config.ConfigError, match="'solver.name': .*Did you mean 'adam'"):
+        tiny(solver=bad)
     with pytest.raises(solvers.UnknownSolverError, match="Did you mean 'adam'"):
-        runner.run_experiment(bad, tmp_path, progress=False)
+        runner.run_experiment(dict(tiny(), solver=bad), tmp_path, progress=False)
+    typo = {"name": "adam", "iterations": 2, "options": {"learning_rate": 0.1}}
+    with pytest.raises(config.ConfigError, match="has no option 'learning_rate'"):
+        tiny(solver=typo)
     with pytest.raises(TypeError, match="has no option 'learning_rate'"):
-        runner.run_experiment(tiny(solver={"name": "adam", "iterations": 2,
-                                           "options": {"learning_rate": 0.1}}),
-                              tmp_path, progress=False)
+        runner.run_experiment(dict(tiny(), solver=typo), tmp_path, progress=False)
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
 
 

@@ -5,7 +5,7 @@ import pytest
 
 import operators
 import solvers
-from invflame.representations.neural_centres import NeuralCentresRepresentation
+from invflame.representations.neural import NeuralCentresRepresentation
 
 
 @pytest.fixture(scope="module")
@@ -53,7 +53,7 @@ def centres32(tiny_scene, plume):
 def test_adam_lowers_the_neural_centres_loss(centres32):
     rep, theta, data = centres32
     problem = rep.problem(data, "tv", x0=theta)
-    assert problem.kind == "neural-centres"
+    assert problem.metadata["representation"] == "neural-centres"
     result = solvers.solve(problem, "adam", lr=2e-3, max_iter=10)
     assert problem.objective(result.x) < 0.85 * problem.objective(theta)
 

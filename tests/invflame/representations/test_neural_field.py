@@ -5,7 +5,7 @@ import pytest
 import torch
 
 from invflame.geometry import VoxelGrid
-from invflame.representations.neural_field import (
+from invflame.representations.neural.network import (
     AMBIENT_START,
     FieldNetwork,
     centre_points,

@@ -5,8 +5,7 @@ import pytest
 import torch
 
 from invflame.geometry import VoxelGrid
-from invflame.representations.neural import CentreRegularizer, NeuralFieldRepresentation
-from invflame.representations.neural_field import pretrain
+from invflame.representations.neural import CentreRegularizer, NeuralFieldRepresentation, pretrain
 from invflame.representations.normalization import SCALES, normalize
 from invflame.representations.voxel import regularizer_for
 

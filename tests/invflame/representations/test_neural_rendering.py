@@ -9,7 +9,7 @@ import torch
 import operators
 import solvers
 from invflame.representations.neural import NeuralFieldRepresentation, NeuralRenderer
-from invflame.representations.neural_sampling import (
+from invflame.representations.neural.sampling import (
     PlanckMeanOpacity,
     emission_weights,
     importance,

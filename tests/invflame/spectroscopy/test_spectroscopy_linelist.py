@@ -5,6 +5,7 @@ from dataclasses import fields
 import numpy as np
 import pytest
 
+from invflame.errors import InputDataError
 from invflame.spectroscopy.linelist import LineList, read_par, write_par
 
 H2O_FILE = "H2O_HITRAN2012_600-800.par"
@@ -116,3 +117,22 @@ def test_linelist_validates_lengths_and_concatenates(h2o):
     assert len(LineList.concatenate([])) == 0
     with pytest.raises(ValueError, match="nu_min <= nu_max"):
         h2o.window(700.0, 650.0)
+
+
+@pytest.mark.parametrize(("field", "columns", "text", "shown"), [
+    ("S296", (16, 25), "-1.000E-20", "-1e-20"),
+    ("S296", (16, 25), "       nan", "nan"),
+    ("gamma_air", (36, 40), "-.070", "-0.07"),
+    ("nu", (4, 15), "         inf", "inf"),
+])
+def test_unphysical_values_are_refused_with_their_line(shared_linedata, tmp_path, field,
+                                                       columns, text, shown):
+    source = (shared_linedata / "H2O_HITRAN2012_600-800.par").read_text().splitlines()[:5]
+    first, last = columns
+    source[3] = source[3][: first - 1] + text + source[3][last:]
+    path = tmp_path / "bad.par"
+    path.write_text("\n".join(source) + "\n")
+    with pytest.raises(InputDataError, match=f"{path}: line 4: field {field} \\(columns "
+                                             f"{first}-{last}\\) must be a finite number.*"
+                                             f"got {shown}"):
+        read_par(path)

@@ -1,7 +1,7 @@
 r"""A cheap neural reparameterization: the network evaluated at voxel centres.
 
 The unknowns are the weights :math:`\theta` of one
-:class:`~invflame.representations.neural_field.FieldNetwork`; the fields are the network at
+:class:`~invflame.representations.neural.network.FieldNetwork`; the fields are the network at
 the voxel centres :math:`c_v`, and the data come from the scene's voxel forward map :math:`H`:
 
 .. math:: F(\theta) = H\big(N_\theta(c)\big), \qquad
@@ -20,18 +20,14 @@ import numpy as np
 import torch
 
 import solvers
-from invflame.representations.neural_field import (
-    TORCH_DTYPES,
-    FieldNetwork,
-    centre_points,
-    pretrain,
-    regularizer_after,
-)
+from invflame.representations.neural.network import FieldNetwork, centre_points, pretrain
+from invflame.representations.neural.regularizers import regularizer_after
+from invflame.representations.protocol import Representation
 from invflame.representations.whitening import whitened
 from operators import Operator, TorchOperator
 
 
-class NeuralCentresRepresentation:
+class NeuralCentresRepresentation(Representation):
     """Network weights as unknowns, the network sampled at the voxel centres.
 
     Parameters
@@ -57,11 +53,9 @@ class NeuralCentresRepresentation:
         self.scene = scene
         self.grid = scene.grid
         self.dtype = np.dtype(scene.dtype)
-        self.network = FieldNetwork(scene.grid, n_frequencies, hidden, depth,
-                                    tuple(scene.table.temperatures[[0, -1]]), seed=seed,
-                                    dtype=TORCH_DTYPES[self.dtype])
+        self.network = FieldNetwork.for_scene(scene, n_frequencies, hidden, depth, seed)
         self.n_parameters = self.network.n_parameters
-        self.centres = centre_points(scene.grid, TORCH_DTYPES[self.dtype])
+        self.centres = centre_points(scene.grid, self.network.lower.dtype)
         shape = (4, *self.grid.shape)
         self.at_centres = self._network_operator(shape, normalized=False)
         self.normalized_at_centres = self._network_operator(shape, normalized=True)
@@ -84,14 +78,14 @@ class NeuralCentresRepresentation:
             Voxel fields (T in K, mole fractions), e.g. the noisy initial field of the voxel
             run; None keeps the current weights.
         iterations, lr, seed, progress
-            Passed to :func:`~invflame.representations.neural_field.pretrain`.
+            Passed to :func:`~invflame.representations.neural.network.pretrain`.
         """
         if fields is not None:
             pretrain(self.network, fields, iterations, lr, seed, progress=progress)
         return self.network.parameter_vector().astype(self.dtype)
 
     def regularizer(self, kind: str) -> solvers.Regularizer | None:
-        """:math:`\\Phi = g \\circ (D \\circ u_\\theta(c))` for ``kind`` in {"none", "tikhonov",
+        r""":math:`\Phi = g \circ (D \circ u_\theta(c))` for ``kind`` in {"none", "tikhonov",
         "tv"} (None for "none"): the voxel regularizer after the normalized network."""
         return regularizer_after(kind, self.grid, self.normalized_at_centres)
 
@@ -100,24 +94,14 @@ class NeuralCentresRepresentation:
         r"""The inverse problem on network weights (kind ``"neural-centres"``): minimize
         :math:`\sum ((F(\theta) - d)/\sigma)^2 + \lambda \Phi(\theta)`.
 
-        Parameters
-        ----------
-        data : ndarray, shape (n_rays, n_out)
-            Measured spectra in W/(m²·sr·cm⁻¹).
-        regularizer : {"none", "tikhonov", "tv"}
-            See :meth:`regularizer`.
-        lam : float
-            Weight λ (default 1e-3), on the scale of the noise-weighted sum of squares.
-        x0 : ndarray, optional
-            Starting weights, e.g. from :meth:`initial_parameters`.
-        sigma : float or array_like, optional
-            Noise standard deviation in W/(m²·sr·cm⁻¹), a scalar or broadcastable to
-            ``(n_rays, n_out)`` (see :mod:`invflame.representations.whitening`); None means 1.
+        The parameters are those of
+        :meth:`~invflame.representations.protocol.Representation.problem`, the regularizer
+        that of :meth:`regularizer`, the starting parameters network weights.
         """
         forward, weighted = whitened(self.forward, data, sigma)
         return solvers.Problem(
             forward, weighted, regularizer=self.regularizer(regularizer), lam=lam, x0=x0,
-            kind=self.kind, name=f"neural-centres/{regularizer}",
+            name=f"neural-centres/{regularizer}",
             metadata={"representation": self.kind, "regularizer": regularizer, "lambda": lam,
                       "noise_weighted": sigma is not None},
         )
@@ -125,8 +109,3 @@ class NeuralCentresRepresentation:
     def fields(self, theta) -> np.ndarray:
         """Physical fields ``(4, nx, ny, nz)`` (T in K, mole fractions) at the voxel centres."""
         return self.at_centres(theta)
-
-    @staticmethod
-    def parameter_bytes(theta) -> int:
-        """Memory of the parameters (the network's weights) in bytes."""
-        return int(np.asarray(theta).nbytes)

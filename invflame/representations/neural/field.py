@@ -1,13 +1,13 @@
 r"""The NeRF-like representation: two neural fields rendered along the measurement rays.
 
 The unknowns are the weights :math:`\theta = (\theta_c, \theta_f)` of a *coarse* and a *fine*
-:class:`~invflame.representations.neural_field.FieldNetwork`. A measured spectrum belongs to a
+:class:`~invflame.representations.neural.network.FieldNetwork`. A measured spectrum belongs to a
 camera pixel, the mean of the spectra of the pixel's ``scene.rays_per_pixel`` sub-rays
 (rows ``p·s … p·s + s − 1`` of ``scene.segments`` for pixel ``p``). Every sub-ray is rendered
 as in NeRF (Mildenhall et al. 2020), with the emission physics of the voxel path:
 
 1. ``n_coarse`` stratified samples on the sub-ray's chord through the domain box
-   (:mod:`~invflame.representations.neural_sampling`), fields from the coarse network;
+   (:mod:`~invflame.representations.neural.sampling`), fields from the coarse network;
 2. ``n_fine`` more samples drawn by inverse CDF from the coarse samples' emission weights
    (opacity from the Planck-mean absorption coefficient), merged with the coarse ones and
    sorted; fields from the fine network;
@@ -58,241 +58,18 @@ from __future__ import annotations
 
 from functools import partial
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 import torch
 
 import solvers
-from invflame.geometry import VoxelGrid
-from invflame.representations.neural_field import (
-    TORCH_DTYPES,
-    FieldNetwork,
-    centre_points,
-    pretrain,
-    regularizer_after,
-)
-from invflame.representations.neural_sampling import (
-    PlanckMeanOpacity,
-    emission_weights,
-    importance,
-    sample_bounds,
-    sample_lengths,
-    stratified,
-)
+from invflame.representations.neural.network import FieldNetwork, centre_points, pretrain
+from invflame.representations.neural.regularizers import CentreRegularizer, regularizer_after
+from invflame.representations.neural.renderer import NeuralRenderer
+from invflame.representations.neural.sampling import PlanckMeanOpacity
+from invflame.representations.protocol import Representation
 from invflame.representations.whitening import noise_weights, whitened
 from operators import Operator, TorchOperator
-from operators.emission_rte import batch_rays_for, emission_radiance, emission_radiance_jvp
-from operators.interop import to_jax, to_numpy, to_torch
-from operators.torch_bridge import torch_function
-
-
-class CentreRegularizer:
-    """Tikhonov or TV of a field function from forward differences between voxel centres.
-
-    For voxel centres :math:`c_v`, :math:`v \\in \\mathcal{V}` (a set of :math:`B` distinct
-    voxels) and a function :math:`u` of position giving normalized fields,
-
-    .. math:: \\hat\\Phi = \\frac{1}{n_f B} \\sum_{v \\in \\mathcal{V}} \\sum_{d, c}
-              h\\Big(\\frac{u_c(c_{v + e_d}) - u_c(c_v)}{\\Delta_d}\\Big),
-
-    :math:`h(x) = x^2` (Tikhonov) or :math:`|x|` (TV), with :math:`v + e_d` the next voxel
-    along axis :math:`d` (:math:`v` itself on the last layer: the difference is zero). Over all
-    voxels this is :func:`operators.tikhonov` / :func:`operators.total_variation` of the
-    fields sampled at the centres; over a uniformly random set of voxels it is an unbiased
-    estimate of it.
-
-    Parameters
-    ----------
-    kind : {"tikhonov", "tv"}
-        The regularizer.
-    grid : VoxelGrid
-        Voxel centres and spacing (m).
-    dtype : torch.dtype, optional
-        Of the centres (default float32).
-    """
-
-    def __init__(self, kind: str, grid: VoxelGrid, dtype=torch.float32):
-        if kind not in ("tikhonov", "tv"):
-            raise ValueError(f"CentreRegularizer is 'tikhonov' or 'tv'; got {kind!r}")
-        self.kind = kind
-        self.points = centre_points(grid, dtype).reshape(-1, 3)
-        self.spacing = torch.tensor(grid.spacing, dtype=dtype)
-        index = np.indices(grid.shape).reshape(3, -1)
-        neighbours = []
-        for axis, n in enumerate(grid.shape):
-            shifted = index.copy()
-            shifted[axis] = np.minimum(shifted[axis] + 1, n - 1)
-            neighbours.append(np.ravel_multi_index(tuple(shifted), grid.shape))
-        self.neighbours = torch.as_tensor(np.stack(neighbours))
-
-    @property
-    def n_centres(self) -> int:
-        """Number of voxel centres."""
-        return self.points.shape[0]
-
-    def __call__(self, u, index: torch.Tensor) -> torch.Tensor:
-        """:math:`\\hat\\Phi` over the voxels ``index`` (1/m² for Tikhonov, 1/m for TV).
-
-        Parameters
-        ----------
-        u : callable
-            Points ``(..., 3)`` in m to normalized fields ``(n_f, ...)`` (dimensionless),
-            differentiable if a gradient is wanted.
-        index : torch.Tensor of int, shape (B,)
-            Distinct C-order flat voxel indices.
-
-        Returns
-        -------
-        torch.Tensor, scalar
-        """
-        points = self.points[torch.cat([index[None], self.neighbours[:, index]])]  # (4, B, 3)
-        values = u(points)  # (n_f, 4, B): the centre, then its neighbours along x, y, z
-        differences = (values[:, 1:] - values[:, :1]) / self.spacing[:, None]
-        terms = differences**2 if self.kind == "tikhonov" else differences.abs()
-        return terms.sum() / (values.shape[0] * index.numel())
-
-
-class NeuralRenderer:
-    """Coarse-to-fine rendering of measured pixel spectra from field functions.
-
-    Parameters
-    ----------
-    scene : invflame.scene.Scene
-        Pixels (``scene.n_rays`` measured spectra, ``scene.rays_per_pixel`` sub-rays each,
-        clipped to its grid's box, pixel-major in ``scene.segments``), emission tables, ILS
-        matrix and dtype.
-    n_coarse, n_fine : int, optional
-        Stratified and importance samples per sub-ray (defaults 64 and 64).
-    batch_rays : int, optional
-        Pixels (measured rays) per rendering call, each with all its sub-rays (fixed, so the
-        kernel compiles once); at most the scene's number of pixels.
-    opacity : PlanckMeanOpacity, optional
-        Planck-mean absorption coefficient for the sampling weights (default: tabulated from
-        the scene's absorption table).
-    """
-
-    def __init__(self, scene, n_coarse: int = 64, n_fine: int = 64, batch_rays: int = 1024,
-                 opacity: PlanckMeanOpacity | None = None):
-        if n_coarse < 1 or n_fine < 0 or batch_rays < 1:
-            raise ValueError(f"need n_coarse >= 1, n_fine >= 0 and batch_rays >= 1; got "
-                             f"{n_coarse}, {n_fine}, {batch_rays}")
-        self.scene = scene
-        self.n_coarse, self.n_fine = int(n_coarse), int(n_fine)
-        self.n_rays = int(scene.n_rays)
-        self.rays_per_pixel = int(getattr(scene, "rays_per_pixel", 1))
-        seg = scene.segments
-        if seg.n_rays != self.n_rays * self.rays_per_pixel:
-            raise ValueError(f"the scene traced {seg.n_rays} sub-rays for {self.n_rays} pixels "
-                             f"of {self.rays_per_pixel} sub-rays each; expected "
-                             f"{self.n_rays * self.rays_per_pixel}")
-        self.batch_rays = min(int(batch_rays), self.n_rays)
-        self.batch_sub_rays = self.batch_rays * self.rays_per_pixel
-        self.dtype = TORCH_DTYPES[np.dtype(scene.dtype)]
-        self.origins, self.directions, self.t_near, self.t_far = (
-            torch.tensor(a, dtype=self.dtype)
-            for a in (seg.origins, seg.directions, seg.t_near, seg.t_far))
-        self.ils = torch.tensor(scene.ils.matrix, dtype=self.dtype)
-        self.opacity = PlanckMeanOpacity.from_table(scene.table) if opacity is None else opacity
-        tables = scene.tables
-        kernel_batch = batch_rays_for(tables, self.batch_sub_rays, scene.memory_budget)
-        radiance = jax.jit(partial(emission_radiance, batch_rays=kernel_batch))
-        self._radiance = torch_function(lambda f, s: radiance(tables, f, s))
-        self._radiance_jvp = jax.jit(lambda f, s, df: emission_radiance_jvp(
-            tables, f, s, df, jnp.zeros_like(s), kernel_batch)[1])
-
-    def sub_rays(self, pixels: torch.Tensor) -> torch.Tensor:
-        """Sub-ray indices ``(B · rays_per_pixel,)`` of pixels ``(B,)``, pixel-major."""
-        s = self.rays_per_pixel
-        return (pixels[:, None] * s + torch.arange(s, dtype=pixels.dtype)).reshape(-1)
-
-    def batches(self) -> list[torch.Tensor]:
-        """Pixel indices covering all pixels in order, in batches of ``batch_rays`` (the last
-        one padded by repeating pixel 0; :meth:`unpad` drops the padding)."""
-        index = torch.arange(self.n_rays)
-        n_pad = -self.n_rays % self.batch_rays
-        index = torch.cat([index, torch.zeros(n_pad, dtype=index.dtype)])
-        return list(index.split(self.batch_rays))
-
-    def deterministic_draws(self) -> tuple[torch.Tensor, torch.Tensor]:
-        """Offsets (bin midpoints) and evenly spaced quantiles for a batch's sub-rays."""
-        offsets = torch.full((self.batch_sub_rays, self.n_coarse), 0.5, dtype=self.dtype)
-        quantiles = (torch.arange(self.n_fine, dtype=self.dtype) + 0.5) / self.n_fine
-        return offsets, quantiles.expand(self.batch_sub_rays, -1)
-
-    def random_draws(self, rng: np.random.Generator) -> tuple[torch.Tensor, torch.Tensor]:
-        """Stratified offsets and quantiles for a batch's sub-rays, uniform in [0, 1)."""
-        return (torch.tensor(rng.random((self.batch_sub_rays, self.n_coarse)), dtype=self.dtype),
-                torch.tensor(rng.random((self.batch_sub_rays, self.n_fine)), dtype=self.dtype))
-
-    def samples(self, rays: torch.Tensor, coarse, offsets, quantiles):
-        """Sample distances and lengths (m) of a batch of sub-rays, and the coarse fields.
-
-        Parameters
-        ----------
-        rays : torch.Tensor of int, shape (R,)
-            Sub-ray indices (rows of ``scene.segments``).
-        coarse : callable
-            ``points (..., 3) in m -> fields (4, ...)`` (T in K, mole fractions).
-        offsets, quantiles : torch.Tensor, shapes (R, n_coarse), (R, n_fine)
-            Stratified offsets and inverse-CDF quantiles in [0, 1).
-
-        Returns
-        -------
-        coarse_fields : torch.Tensor, shape (4, R, n_coarse)
-        coarse_lengths : torch.Tensor, shape (R, n_coarse)
-        t_fine, fine_lengths : torch.Tensor, shape (R, n_coarse + n_fine)
-            Merged, sorted sample distances and their lengths, in m.
-        """
-        t_near, t_far = self.t_near[rays], self.t_far[rays]
-        t_coarse = stratified(t_near, t_far, offsets)
-        coarse_fields = coarse(self.points(rays, t_coarse))
-        coarse_lengths = sample_lengths(t_coarse, t_near, t_far)
-        with torch.no_grad():
-            weights = emission_weights(self.opacity(coarse_fields.detach()), coarse_lengths)
-            t_extra = importance(sample_bounds(t_coarse, t_near, t_far), weights, quantiles)
-            t_fine = torch.sort(torch.cat([t_coarse, t_extra], dim=1), dim=1).values
-        return coarse_fields, coarse_lengths, t_fine, sample_lengths(t_fine, t_near, t_far)
-
-    def points(self, rays: torch.Tensor, t: torch.Tensor) -> torch.Tensor:
-        """Positions (m) ``(R, n, 3)`` at distances ``t`` ``(R, n)`` along sub-rays."""
-        return self.origins[rays, None, :] + t[..., None] * self.directions[rays, None, :]
-
-    def _pixels(self, radiance: torch.Tensor) -> torch.Tensor:
-        """Sub-ray radiance ``(B · rays_per_pixel, n_eta)`` → pixel spectra ``(B, n_out)``:
-        the mean over each pixel's sub-rays, then the ILS."""
-        per_pixel = radiance.reshape(-1, self.rays_per_pixel, radiance.shape[-1]).mean(dim=1)
-        return per_pixel @ self.ils.T
-
-    def measure(self, fields: torch.Tensor, lengths: torch.Tensor) -> torch.Tensor:
-        """Measured spectra ``(B, n_out)`` in W/(m²·sr·cm⁻¹) of the sampled sub-rays of ``B``
-        pixels (``fields`` ``(4, B · rays_per_pixel, n)``, ``lengths`` in m): the emission
-        kernel (torch-differentiable in ``fields``), the mean over sub-rays and the ILS."""
-        return self._pixels(self._radiance(fields.contiguous(), lengths.contiguous()))
-
-    def measure_jvp(self, fields, lengths, d_fields) -> torch.Tensor:
-        """Directional derivative of :meth:`measure` along ``d_fields`` (forward mode)."""
-        d_radiance = self._radiance_jvp(to_jax(fields.contiguous()), to_jax(lengths.contiguous()),
-                                        to_jax(d_fields.contiguous()))
-        return self._pixels(to_torch(d_radiance))
-
-    def render(self, pixels, coarse, fine, offsets, quantiles):
-        """Coarse and fine spectra ``(B, n_out)`` (W/(m²·sr·cm⁻¹)) of a batch of pixels.
-
-        ``pixels`` ``(B,)`` are pixel indices; ``coarse`` and ``fine`` map points ``(..., 3)``
-        in m to fields ``(4, ...)``; ``offsets`` and ``quantiles`` are per sub-ray, as in
-        :meth:`samples`. Differentiable through both field functions.
-        """
-        rays = self.sub_rays(pixels)
-        coarse_fields, coarse_lengths, t_fine, fine_lengths = self.samples(
-            rays, coarse, offsets, quantiles)
-        fine_fields = fine(self.points(rays, t_fine))
-        return (self.measure(coarse_fields, coarse_lengths),
-                self.measure(fine_fields, fine_lengths))
-
-    def unpad(self, values: list[torch.Tensor]) -> torch.Tensor:
-        """Concatenate per-batch outputs of :meth:`batches` and drop the padding."""
-        return torch.cat(values)[:self.n_rays]
+from operators.interop import to_numpy
 
 
 class NeuralRendering(Operator):
@@ -437,7 +214,7 @@ class StochasticObjective:
         return loss.item(), to_numpy(theta.grad)
 
 
-class NeuralFieldRepresentation:
+class NeuralFieldRepresentation(Representation):
     """Coarse and fine neural fields rendered along the rays: the paper's NN representation.
 
     Parameters
@@ -472,8 +249,7 @@ class NeuralFieldRepresentation:
         self.grid = scene.grid
         self.seed = int(seed)
         self.renderer = NeuralRenderer(scene, n_coarse, n_fine, batch_rays, opacity)
-        network = partial(FieldNetwork, scene.grid, n_frequencies, hidden, depth,
-                          tuple(scene.table.temperatures[[0, -1]]), dtype=self.renderer.dtype)
+        network = partial(FieldNetwork.for_scene, scene, n_frequencies, hidden, depth)
         self.coarse, self.fine = network(seed=seed), network(seed=seed + 1)
         self.n_parameters = self.coarse.n_parameters + self.fine.n_parameters
         self.centres = centre_points(scene.grid, self.renderer.dtype)
@@ -514,7 +290,7 @@ class NeuralFieldRepresentation:
             Voxel fields on the scene's grid (T in K, mole fractions), e.g. the noisy initial
             field of the voxel run; None keeps the networks' current weights.
         iterations, lr, seed, progress
-            Passed to :func:`~invflame.representations.neural_field.pretrain`.
+            Passed to :func:`~invflame.representations.neural.network.pretrain`.
 
         Returns
         -------
@@ -527,7 +303,7 @@ class NeuralFieldRepresentation:
 
     # -- the problem ----------------------------------------------------------------------
     def regularizer(self, kind: str) -> solvers.Regularizer | None:
-        """:math:`\\Phi` over all voxel centres (the voxel regularizer of :meth:`fields`,
+        r""":math:`\Phi` over all voxel centres (the voxel regularizer of :meth:`fields`,
         normalized) for ``kind`` in {"none", "tikhonov", "tv"}; None for "none"."""
         shape = (4, *self.grid.shape)
         normalized = TorchOperator(
@@ -539,19 +315,12 @@ class NeuralFieldRepresentation:
                 sigma=None, stochastic: bool = True) -> solvers.Problem:
         """The inverse problem on network weights (kind ``"neural-field"``).
 
+        ``data``, ``regularizer`` (of the fine network's normalized fields, see the module
+        docstring), ``lam``, ``x0`` (network weights) and ``sigma`` are those of
+        :meth:`~invflame.representations.protocol.Representation.problem`.
+
         Parameters
         ----------
-        data : ndarray, shape (n_rays, n_out)
-            Measured pixel spectra in W/(m²·sr·cm⁻¹).
-        regularizer : {"none", "tikhonov", "tv"}
-            Regularizer of the fine network's normalized fields (see the module docstring).
-        lam : float
-            Weight λ (default 1e-3), on the scale of the noise-weighted sum of squares.
-        x0 : ndarray, optional
-            Starting weights, e.g. from :meth:`initial_parameters`.
-        sigma : float or array_like, optional
-            Noise standard deviation in W/(m²·sr·cm⁻¹), a scalar or broadcastable to
-            ``(n_rays, n_out)`` (e.g. per output wavenumber); None means 1.
         stochastic : bool, optional
             Attach the stochastic :class:`StochasticObjective` (default; one solver iteration
             is one pixel batch, :attr:`iterations_per_epoch` of them one epoch). Without it,
@@ -569,7 +338,9 @@ class NeuralFieldRepresentation:
         renderer = self.renderer
         return solvers.Problem(
             forward, weighted, regularizer=self.regularizer(regularizer), lam=lam, x0=x0,
-            kind=self.kind, name=f"neural-field/{regularizer}",
+            linearizable=False, advice="Use the voxel-centre network (representation "
+            "'neural-centres'), whose Jacobian is a small network Jacobian times the voxel one.",
+            name=f"neural-field/{regularizer}",
             metadata={"representation": self.kind, "regularizer": regularizer, "lambda": lam,
                       "noise_weighted": sigma is not None, "n_coarse": renderer.n_coarse,
                       "n_fine": renderer.n_fine, "batch_rays": renderer.batch_rays,
@@ -587,8 +358,3 @@ class NeuralFieldRepresentation:
         theta_f = self.split(torch.as_tensor(np.asarray(theta), dtype=self.renderer.dtype))[1]
         with torch.no_grad():
             return to_numpy(self.fine.evaluate(theta_f, self.centres))
-
-    @staticmethod
-    def parameter_bytes(theta) -> int:
-        """Memory of the parameters (both networks' weights) in bytes."""
-        return int(np.asarray(theta).nbytes)

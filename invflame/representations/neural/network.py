@@ -28,17 +28,12 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
-import solvers
 from invflame.geometry import VoxelGrid
 from invflame.representations.normalization import SCALES
-from invflame.representations.voxel import regularizer_for
-from operators import Operator
+from operators.interop import TORCH_DTYPES
 
 AMBIENT_START = (300.0, 0.02, 0.02, 0.02)
 """Fields (T in K, mole fractions) of an untrained network: the last layer's bias values."""
-
-TORCH_DTYPES = {np.dtype(np.float32): torch.float32, np.dtype(np.float64): torch.float64}
-"""Torch dtype of a scene's NumPy dtype."""
 
 
 def _logit(p: float) -> float:
@@ -46,7 +41,7 @@ def _logit(p: float) -> float:
 
 
 class FieldNetwork(torch.nn.Module):
-    """MLP from position (m) to physical fields ``(T [K], X_CO2, X_H2O, X_CH4)``.
+    r"""MLP from position (m) to physical fields ``(T [K], X_CO2, X_H2O, X_CH4)``.
 
     Parameters
     ----------
@@ -59,7 +54,7 @@ class FieldNetwork(torch.nn.Module):
     depth : int, optional
         Number of hidden layers (default 4).
     temperature_range : tuple of float, optional
-        :math:`(T_\\min, T_\\max)` in K of the output (default 250–2500 K).
+        :math:`(T_\min, T_\max)` in K of the output (default 250–2500 K).
     seed : int, optional
         Seed of the weight initialization (default 0).
     dtype : torch.dtype, optional
@@ -99,9 +94,18 @@ class FieldNetwork(torch.nn.Module):
             self.n_frequencies, dtype=dtype))
         self.register_buffer("scales", torch.as_tensor(SCALES, dtype=dtype))
 
+    @classmethod
+    def for_scene(cls, scene, n_frequencies: int = 10, hidden: int = 64, depth: int = 4,
+                  seed: int = 0) -> FieldNetwork:
+        """A network on a scene's grid, with its absorption table's temperature range (K) and
+        its dtype (float32 or float64); the other parameters as for :class:`FieldNetwork`."""
+        return cls(scene.grid, n_frequencies, hidden, depth,
+                   tuple(scene.table.temperatures[[0, -1]]), seed=seed,
+                   dtype=TORCH_DTYPES[np.dtype(scene.dtype)])
+
     # -- the map ------------------------------------------------------------------------------
     def encode(self, points: torch.Tensor) -> torch.Tensor:
-        """:math:`\\gamma(p)` of points ``(..., 3)`` in m: shape ``(..., 3 (1 + 2 L))``."""
+        r""":math:`\gamma(p)` of points ``(..., 3)`` in m: shape ``(..., 3 (1 + 2 L))``."""
         p = 2.0 * (points - self.lower) / self.extent - 1.0
         angles = (p[..., None, :] * self.frequencies[:, None]).flatten(-2)
         return torch.cat([p, torch.sin(angles), torch.cos(angles)], dim=-1)
@@ -116,8 +120,10 @@ class FieldNetwork(torch.nn.Module):
 
     def normalized(self, points: torch.Tensor) -> torch.Tensor:
         """Normalized fields :math:`u = f / s` at points ``(..., 3)``: shape ``(4, ...)``."""
-        out = self(points)
-        return out / self.scales.reshape((4,) + (1,) * (out.ndim - 1))
+        return self._normalize(self(points))
+
+    def _normalize(self, fields: torch.Tensor) -> torch.Tensor:
+        return fields / self.scales.reshape((4,) + (1,) * (fields.ndim - 1))
 
     # -- flat parameter vectors ---------------------------------------------------------------
     @property
@@ -162,9 +168,7 @@ class FieldNetwork(torch.nn.Module):
         torch.Tensor, shape (4, ...)
         """
         out = torch.func.functional_call(self, self.unflatten(theta), (points,))
-        if normalized:
-            out = out / self.scales.reshape((4,) + (1,) * (out.ndim - 1))
-        return out
+        return self._normalize(out) if normalized else out
 
     def _check(self, theta: torch.Tensor) -> torch.Tensor:
         if theta.shape != (self.n_parameters,):
@@ -188,33 +192,6 @@ def centre_points(grid: VoxelGrid, dtype=torch.float32) -> torch.Tensor:
     return torch.as_tensor(grid.centres(), dtype=dtype)
 
 
-def regularizer_after(kind: str, grid: VoxelGrid,
-                      normalized: Operator) -> solvers.Regularizer | None:
-    r"""The voxel regularizer of the normalized fields an operator produces.
-
-    :math:`\Phi(\theta) = g(D\,u(\theta))`, with the forward-difference gradient :math:`D`
-    (1/m) and outer functional :math:`g` of
-    :func:`~invflame.representations.voxel.regularizer_for`, after ``normalized``
-    (:math:`\theta \mapsto u`, e.g. a network at the voxel centres): the voxel regularizer of
-    :math:`u(\theta)`.
-
-    Parameters
-    ----------
-    kind : {"none", "tikhonov", "tv"}
-        Regularizer; None is returned for "none".
-    grid : VoxelGrid
-        Grid of the fields (shape and spacing in m).
-    normalized : operators.Operator
-        Parameters to normalized fields ``(4, nx, ny, nz)`` (:math:`u = f/s`, dimensionless).
-
-    Returns
-    -------
-    solvers.Regularizer or None
-    """
-    composite = regularizer_for(kind, grid)
-    if composite is None:
-        return None
-    return solvers.Regularizer(composite.functional, composite.op @ normalized)
 
 
 def pretrain(network: FieldNetwork, target, iterations: int = 2000, lr: float = 1e-3,

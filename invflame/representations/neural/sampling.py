@@ -48,8 +48,8 @@ def sample_lengths(t: torch.Tensor, t_near: torch.Tensor, t_far: torch.Tensor) -
 
 
 def emission_weights(kappa: torch.Tensor, lengths: torch.Tensor) -> torch.Tensor:
-    """:math:`w_i = \\alpha_i \\prod_{j<i}(1 - \\alpha_j)`, :math:`\\alpha = 1 -
-    e^{-\\kappa\\delta}`, for ``kappa`` (m⁻¹) and ``lengths`` (m) ``(n_rays, n)``."""
+    r""":math:`w_i = \alpha_i \prod_{j<i}(1 - \alpha_j)`, :math:`\alpha = 1 -
+    e^{-\kappa\delta}`, for ``kappa`` (m⁻¹) and ``lengths`` (m) ``(n_rays, n)``."""
     tau = kappa * lengths
     before = torch.cumsum(tau, dim=1) - tau
     return -torch.expm1(-tau) * torch.exp(-before)
@@ -85,9 +85,9 @@ def importance(bounds: torch.Tensor, weights: torch.Tensor, u: torch.Tensor,
 
 
 class PlanckMeanOpacity:
-    """Planck-mean absorption coefficient :math:`\\bar\\kappa(T, X)` in m⁻¹, tabulated in T.
+    r"""Planck-mean absorption coefficient :math:`\bar\kappa(T, X)` in m⁻¹, tabulated in T.
 
-    :math:`\\bar\\kappa = \\sum_s X_s\\, k_s(T)` is linear in the mole fractions, so the
+    :math:`\bar\kappa = \sum_s X_s\, k_s(T)` is linear in the mole fractions, so the
     per-species coefficients :math:`k_s(T)` (m⁻¹ per unit mole fraction, from
     :meth:`AbsorptionTable.planck_mean_kappa`) are tabulated on a temperature grid and
     interpolated linearly.
@@ -122,7 +122,7 @@ class PlanckMeanOpacity:
         return cls(temperatures, np.stack(per_species))
 
     def __call__(self, fields: torch.Tensor) -> torch.Tensor:
-        """:math:`\\bar\\kappa` in m⁻¹ for fields ``(1 + n_species, ...)`` (T in K, then mole
+        r""":math:`\bar\kappa` in m⁻¹ for fields ``(1 + n_species, ...)`` (T in K, then mole
         fractions): shape ``fields.shape[1:]``."""
         nodes = self.temperatures.to(fields.dtype)
         table = self.per_species.to(fields.dtype)

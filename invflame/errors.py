@@ -1,0 +1,38 @@
+"""The errors invflame raises for bad input, one type per domain.
+
+Every message names what was wrong (the configuration key, the file and line, the variable),
+the value found and what is allowed or how to fix it. The command line (:func:`invflame.cli.main`)
+prints the message of any :class:`InvflameError` without a traceback and exits with status 2.
+
+The types subclass the built-in exceptions a caller would otherwise catch (``ValueError`` for
+bad values, ``OSError`` for files and folders), so ``except ValueError`` keeps working.
+"""
+
+from __future__ import annotations
+
+
+class InvflameError(Exception):
+    """Base class of the errors in this module: bad input, explained in the message."""
+
+
+class ConfigError(InvflameError, ValueError):
+    """A configuration key or value is invalid; the message names the key and what is allowed."""
+
+
+class InputDataError(InvflameError, ValueError):
+    """A data file or array (line list, field, checkpoint, cached table) is unusable; the
+    message names the file (and line) and what to do."""
+
+
+class GeometryError(InvflameError, ValueError):
+    """The cameras, rays or grid cannot make a measurement (cameras inside the grid, no ray
+    crossing it)."""
+
+
+class NumericsError(InvflameError, ValueError):
+    """A computation produced non-finite or meaningless numbers."""
+
+
+class OutputError(InvflameError, OSError):
+    """An output path cannot be written: it is a file where a folder is needed, it lies under
+    a file, or another process is writing the same run folder."""

@@ -1,0 +1,337 @@
+r"""Measured spectra as a NetCDF file: radiance, wavenumbers, cameras, instrument, noise, mask.
+
+A measurement file holds what a reconstruction needs from the instrument, with no ground
+truth: ``invflame simulate --out m.nc`` writes one, ``[data] source = "m.nc"`` makes
+``invflame run`` reconstruct from it. NetCDF-4 through ``xarray`` (``netCDF4`` engine), CF-style
+as :mod:`invflame.export`, every variable with its ``units``:
+
+=================== ========================== =========================================
+variable            dimensions                 units: meaning
+=================== ========================== =========================================
+``radiance``        (camera, v, u, wavenumber) W/(m2 sr cm-1): the measured spectra,
+                                               ``image[v, u]`` with row 0 at the top
+``wavenumber``      (wavenumber)               cm-1, coordinate: any strictly monotone
+                                               grid (irregular allowed)
+``nesr``            (wavenumber)               W/(m2 sr cm-1): noise standard deviation
+                                               per wavenumber, or
+``sigma``           (camera, v, u, wavenumber) W/(m2 sr cm-1): one per value (neither:
+                                               noise unknown, an unweighted misfit)
+``bad_pixel``       (camera, v, u)             1 for a pixel to leave out, else 0
+``bad_wavenumber``  (wavenumber)               1 for a wavenumber to leave out, else 0
+``position``        (camera, xyz)              m: the cameras' pinholes
+``look_at``         (camera, xyz)              m: a point on each optical axis
+``up``              (camera, xyz)              1: each image's up direction
+``focal_length``    (camera)                   m
+``sensor_size``     (camera, uv)               m: (width, height)
+``principal_point`` (camera, uv)               pixel: (u, v) from the top-left corner
+=================== ========================== =========================================
+
+The camera variables are the records of a rig file (:mod:`invflame.geometry.rig_file`),
+with the pixel counts from the ``u`` and ``v`` dimensions, so the rig round-trips to that
+format. Global attributes: ``resolution`` (cm-1, 1/MOPD) and ``apodization``
+(``"triangular"``) of the instrument, ``noise`` (``"nesr"``, ``"sigma"`` or ``"none"``),
+``provenance`` (JSON: how the data were made), ``Conventions``, ``invflame_version``,
+``date_created``.
+
+**Masks.** ``radiance`` (and ``nesr`` or ``sigma``) may be NaN only where masked. In memory
+(:class:`~invflame.experiments.measurement.Measurement`), a masked value has ``sigma = inf`` —
+weight 0 in the data term (:func:`invflame.representations.whitening.noise_weights`) — and
+``data = 0``; ``n_measurements`` counts only the others.
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from invflame import __version__
+from invflame.atomic_files import write_atomic
+from invflame.errors import InputDataError
+from invflame.experiments.measurement import Measurement
+from invflame.geometry import CameraRig
+from invflame.geometry.rig_file import APODIZATIONS, parse_rig, rig_records
+
+RADIANCE_UNITS = "W/(m2 sr cm-1)"
+"""``units`` of ``radiance``, ``nesr`` and ``sigma``."""
+
+DIMS = ("camera", "v", "u", "wavenumber")
+"""Dimensions of ``radiance`` and ``sigma``, in order."""
+
+CAMERA_VARIABLES = {
+    # variable: (dimensions, units, long name)
+    "position": (("camera", "xyz"), "m", "camera pinhole"),
+    "look_at": (("camera", "xyz"), "m", "point on the optical axis"),
+    "up": (("camera", "xyz"), "1", "up direction of the image"),
+    "focal_length": (("camera",), "m", "focal length"),
+    "sensor_size": (("camera", "uv"), "m", "sensor width and height"),
+    "principal_point": (("camera", "uv"), "pixel",
+                        "optical axis on the sensor, from the image's top-left corner"),
+}
+"""The rig's variables: the keys of a rig file's camera records."""
+
+
+@dataclass(frozen=True, eq=False)
+class MeasurementFile:
+    """A measurement with the cameras and instrument that made it.
+
+    Attributes
+    ----------
+    measurement : Measurement
+        Spectra ``(n_pixels, n_out)`` in W/(m²·sr·cm⁻¹), pixels camera after camera in the
+        rig's ray order, and their noise σ (``inf`` where masked).
+    rig : CameraRig
+        The cameras (all with the same pixel counts).
+    wavenumber : ndarray, shape (n_out,)
+        The measured wavenumbers in cm⁻¹.
+    resolution : float
+        The instrument's resolution 1/MOPD in cm⁻¹.
+    apodization : str
+        The instrument's apodization (one of
+        :data:`invflame.geometry.rig_file.APODIZATIONS`).
+    """
+
+    measurement: Measurement
+    rig: CameraRig
+    wavenumber: np.ndarray
+    resolution: float
+    apodization: str = "triangular"
+
+
+def _mask(measurement: Measurement, rig: CameraRig) -> tuple[np.ndarray, np.ndarray]:
+    """Bad pixels ``(n_pixels,)`` and bad wavenumbers ``(n_out,)`` of a measurement's inf σ."""
+    masked = np.isinf(np.broadcast_to(measurement.sigma, measurement.data.shape))
+    pixels, wavenumbers = masked.all(axis=1), masked.all(axis=0)
+    if np.any(masked & ~pixels[:, None] & ~wavenumbers[None, :]):
+        raise ValueError("masked values (sigma = inf) must make up whole pixels or whole "
+                         "wavenumbers to be written: a measurement file masks bad pixels and "
+                         "bad wavenumbers")
+    return pixels, wavenumbers
+
+
+def measurement_dataset(measured: MeasurementFile) -> xr.Dataset:
+    """A measurement as an ``xarray.Dataset`` in the layout of the module docstring.
+
+    Raises
+    ------
+    ValueError
+        For cameras with different pixel counts, shapes that do not match the rig and the
+        wavenumbers, or masked values that are not whole pixels or wavenumbers.
+    """
+    m, rig = measured.measurement, measured.rig
+    wavenumber = np.asarray(measured.wavenumber, np.float64)
+    if m.data.shape != (rig.n_rays, wavenumber.size):
+        raise ValueError(f"the measurement's data {m.data.shape} do not match the rig's "
+                         f"{rig.n_rays} pixels and {wavenumber.size} wavenumbers")
+    if len(set(rig.image_shapes)) != 1:
+        raise ValueError(f"a measurement file needs cameras with the same pixel counts; these "
+                         f"have image shapes {rig.image_shapes}")
+    bad_pixel, bad_wavenumber = _mask(m, rig)
+    masked = bad_pixel[:, None] | bad_wavenumber[None, :]
+
+    def images(values):
+        return rig.to_images(np.where(masked, np.nan, values))
+
+    variables = {"radiance": (DIMS, images(m.data),
+                              {"units": RADIANCE_UNITS, "long_name": "measured spectral radiance"}),
+                 "bad_pixel": (DIMS[:3], rig.to_images(bad_pixel.astype(np.int8)),
+                               {"long_name": "1: pixel left out of the data term"}),
+                 "bad_wavenumber": (("wavenumber",), bad_wavenumber.astype(np.int8),
+                                    {"long_name": "1: wavenumber left out of the data term"})}
+    sigma = np.asarray(m.sigma, np.float64)
+    noise = "none" if not m.noisy else "nesr" if sigma.ndim == 1 else "sigma"
+    if noise == "nesr":
+        variables["nesr"] = (("wavenumber",), np.where(bad_wavenumber, np.nan, sigma),
+                             {"units": RADIANCE_UNITS,
+                              "long_name": "noise-equivalent spectral radiance"})
+    elif noise == "sigma":
+        variables["sigma"] = (DIMS, images(np.broadcast_to(sigma, m.data.shape)),
+                              {"units": RADIANCE_UNITS,
+                               "long_name": "noise standard deviation per value"})
+    for (name, value), (dims, units, long_name) in zip(
+            _camera_columns(rig).items(), CAMERA_VARIABLES.values(), strict=True):
+        variables[name] = (dims, value, {"units": units, "long_name": long_name})
+    now = datetime.datetime.now(datetime.UTC).replace(microsecond=0).isoformat()
+    attrs = {"Conventions": "CF-1.10", "title": "invflame measurement",
+             "source": f"invflame {__version__}", "invflame_version": __version__,
+             "date_created": now, "resolution": float(measured.resolution),
+             "resolution_units": "cm-1", "apodization": measured.apodization, "noise": noise,
+             "provenance": json.dumps(m.provenance)}
+    coords = {"wavenumber": ("wavenumber", wavenumber,
+                             {"units": "cm-1", "long_name": "wavenumber"})}
+    return xr.Dataset(variables, coords=coords, attrs=attrs)
+
+
+def _camera_columns(rig: CameraRig) -> dict[str, np.ndarray]:
+    """The rig's records as one array per key of :data:`CAMERA_VARIABLES`."""
+    records = rig_records(rig)
+    return {key: np.array([r[key] for r in records], np.float64) for key in CAMERA_VARIABLES}
+
+
+def write_measurement(measured: MeasurementFile, path) -> Path:
+    """Write a measurement file atomically (NetCDF-4; see the module docstring).
+
+    Parameters
+    ----------
+    measured : MeasurementFile
+        Spectra, noise, mask, cameras and instrument.
+    path : str or os.PathLike
+        Destination (``.nc``); parent folders are created.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
+    dataset = measurement_dataset(measured)
+    encoding = {name: {"zlib": True, "complevel": 4} for name in ("radiance", "sigma")
+                if name in dataset}
+    content = dataset.to_netcdf(engine="netcdf4", format="NETCDF4", encoding=encoding)
+    return write_atomic(path, lambda handle: handle.write(content))
+
+
+class _Reader:
+    """Checked access to the variables of an open measurement file."""
+
+    def __init__(self, dataset: xr.Dataset, path: Path):
+        self.dataset, self.path = dataset, path
+
+    def fail(self, message: str):
+        raise InputDataError(f"{self.path}: {message}")
+
+    def variable(self, name: str, dims: tuple[str, ...], units: str | None) -> np.ndarray:
+        if name not in self.dataset.variables:
+            self.fail(f"missing variable {name!r} (dimensions {dims}"
+                      + (f", units {units!r}" if units else "") + "); a measurement file "
+                      "holds the variables of invflame.measurement_file")
+        var = self.dataset[name]
+        if var.dims != dims:
+            self.fail(f"variable {name!r} has dimensions {var.dims}, expected {dims}")
+        if units is not None and var.attrs.get("units") != units:
+            self.fail(f"variable {name!r} has units {var.attrs.get('units')!r}, expected "
+                      f"{units!r}; convert it to {units}")
+        return np.asarray(var.values)
+
+    def attribute(self, name: str):
+        if name not in self.dataset.attrs:
+            self.fail(f"missing global attribute {name!r}")
+        return self.dataset.attrs[name]
+
+    def positive(self, name: str, values: np.ndarray, masked: np.ndarray) -> None:
+        ok = np.isnan(values) & masked | (values > 0)
+        if not np.all(ok):
+            self.fail(f"variable {name!r} must be positive where not masked (NaN allowed only "
+                      f"in bad pixels and wavenumbers); {int((~ok).sum())} values are not")
+
+
+def read_measurement(path, rig: CameraRig | None = None,
+                     rig_source: str = "the rig") -> MeasurementFile:
+    """Read a measurement file (see the module docstring), checking every variable.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A file written by :func:`write_measurement` or by a user in its layout.
+    rig : CameraRig, optional
+        Cameras the data must come from (a configuration's rig): the file's must be the same.
+    rig_source : str, optional
+        What gave ``rig``, for messages (e.g. the rig file's name).
+
+    Returns
+    -------
+    MeasurementFile
+        Masked values have ``sigma = inf`` and ``data = 0``. ``sigma`` is per wavenumber for
+        ``nesr`` (or unknown noise, σ = 1, ``noisy`` False) without bad pixels, else per value.
+
+    Raises
+    ------
+    FileNotFoundError
+        If there is no file at ``path``.
+    InputDataError
+        For a file that is not NetCDF, a missing variable or attribute, wrong dimensions or
+        units, a shape or camera that does not match ``rig``, NaN outside the mask, a
+        wavenumber grid that is not strictly monotone or noise that is not positive; the
+        message names the file and the variable.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"measurement file not found: {path}")
+    try:
+        with xr.open_dataset(path, engine="netcdf4") as opened:
+            dataset = opened.load()
+    except (OSError, ValueError) as err:
+        raise InputDataError(f"{path}: not a NetCDF measurement file ({err})") from err
+    read = _Reader(dataset, path)
+    radiance = read.variable("radiance", DIMS, RADIANCE_UNITS)
+    wavenumber = read.variable("wavenumber", ("wavenumber",), "cm-1").astype(np.float64)
+    steps = np.diff(wavenumber)
+    if not (np.all(np.isfinite(wavenumber)) and (np.all(steps > 0) or np.all(steps < 0))):
+        read.fail("variable 'wavenumber' must be finite and strictly monotone (cm-1)")
+    n_cameras, nv, nu, n_out = radiance.shape
+    records = {name: read.variable(name, dims, units)
+               for name, (dims, units, _) in CAMERA_VARIABLES.items()}
+    spec = parse_rig([{key: values[i].tolist() for key, values in records.items()}
+                      | {"pixels": [nu, nv]} for i in range(n_cameras)], str(path))
+    if rig is not None:
+        _check_same_rig(read, spec.rig, rig, rig_source)
+    bad_pixel = read.variable("bad_pixel", DIMS[:3], None).astype(bool).reshape(-1)
+    bad_wavenumber = read.variable("bad_wavenumber", ("wavenumber",), None).astype(bool)
+    masked = bad_pixel[:, None] | bad_wavenumber[None, :]
+    data = radiance.reshape(-1, n_out)
+    if np.any(np.isnan(data) & ~masked) or np.any(np.isinf(data)):
+        where = np.argwhere(~np.isfinite(data) & ~masked)[0]
+        camera, pixel = divmod(int(where[0]), nu * nv)
+        read.fail(f"variable 'radiance' holds {int((~np.isfinite(data) & ~masked).sum())} "
+                  f"NaN or infinite values outside the mask, the first at camera {camera}, "
+                  f"v {pixel // nu}, u {pixel % nu}, wavenumber {wavenumber[where[1]]:g} cm-1; "
+                  "flag those pixels in 'bad_pixel' or wavenumbers in 'bad_wavenumber'")
+    noise = read.attribute("noise")
+    if noise == "nesr":
+        sigma = read.variable("nesr", ("wavenumber",), RADIANCE_UNITS).astype(np.float64)
+        read.positive("nesr", sigma, bad_wavenumber)
+    elif noise == "sigma":
+        sigma = read.variable("sigma", DIMS, RADIANCE_UNITS).astype(np.float64).reshape(-1, n_out)
+        read.positive("sigma", sigma, masked)
+    elif noise == "none":
+        sigma = np.ones(n_out)
+    else:
+        read.fail(f"global attribute 'noise' = {noise!r}; allowed: 'nesr', 'sigma', 'none'")
+    if sigma.ndim == 2 or bad_pixel.any():
+        sigma = np.where(masked, np.inf, np.broadcast_to(sigma, data.shape))
+    else:
+        sigma = np.where(bad_wavenumber, np.inf, sigma)
+    resolution = read.attribute("resolution")
+    if not (isinstance(resolution, int | float | np.number) and resolution > 0):
+        read.fail(f"global attribute 'resolution' must be a positive number in cm-1, got "
+                  f"{resolution!r}")
+    apodization = read.attribute("apodization")
+    if apodization not in APODIZATIONS:
+        read.fail(f"global attribute 'apodization' = {apodization!r} is not modelled; allowed: "
+                  f"{', '.join(APODIZATIONS)}")
+    try:
+        provenance = json.loads(dataset.attrs.get("provenance", "{}"))
+    except json.JSONDecodeError as err:
+        read.fail(f"global attribute 'provenance' is not JSON: {err}")
+    measurement = Measurement(np.where(masked, 0, data).astype(data.dtype), sigma,
+                              noise != "none", provenance)
+    return MeasurementFile(measurement, spec.rig, wavenumber, float(resolution), apodization)
+
+
+def _check_same_rig(read: _Reader, found: CameraRig, expected: CameraRig, source: str) -> None:
+    """Refuse a file whose cameras are not ``expected``'s, naming the first difference."""
+    if found.image_shapes != expected.image_shapes:
+        read.fail(f"variable 'radiance' holds {found.n_cameras} camera(s) of image shape "
+                  f"{found.image_shapes[0]} (v, u) but {source} has {expected.n_cameras} of "
+                  f"{list(expected.image_shapes)}: use the rig the data were measured with")
+    mine, theirs = _camera_columns(found), _camera_columns(expected)
+    for key in CAMERA_VARIABLES:
+        differs = ~np.isclose(mine[key], theirs[key], rtol=1e-9, atol=1e-12)
+        if differs.any():
+            camera = int(np.argwhere(differs)[0][0])
+            read.fail(f"variable {key!r} of camera {camera} is {mine[key][camera].tolist()} but "
+                      f"{source} says {theirs[key][camera].tolist()}: use the rig the data were "
+                      "measured with")

@@ -1,0 +1,401 @@
+r"""The emission kernel: thermal emission along rays through a piecewise-homogeneous gas.
+
+Each ray is cut into segments, nearest the camera first, with uniform temperature :math:`T_k`
+(K), mole fractions :math:`X_{s,k}` and length :math:`\Delta s_k` (m). The formal solution of
+the radiative transfer equation without scattering, in front of a background of radiance
+:math:`I_\mathrm{bg}(\eta)` (a wall or the sky behind the flame; zero when there is none), is
+
+.. math::
+
+    I(\eta) = \sum_k B_\eta(T_k)\,(1 - t_k)\,P_k + \tau_\mathrm{ray}\, I_\mathrm{bg},
+    \qquad t_k = e^{-\tau_k}, \qquad P_k = \prod_{j<k} t_j, \qquad
+    \tau_\mathrm{ray} = P_{n}, \qquad \tau_k = \kappa_k \Delta s_k,
+
+    \kappa_k(\eta) = \sum_s X_{s,k}\, N(T_k, p)\, \sigma_s(\eta, T_k) \cdot 10^{-4},
+    \qquad N = \frac{p}{k_B T},
+
+plus, with soot, the Rayleigh continuum :math:`C f_{v,k}\, \eta \cdot 10^2` of the soot volume
+fraction :math:`f_{v,k}` (:mod:`operators.rte_tables`), with :math:`I` in W/(m²·sr·cm⁻¹),
+:math:`\kappa` in m⁻¹, :math:`N` in molecules/m³ and the
+absorption cross-sections :math:`\sigma_s` in cm²/molecule (the :math:`10^{-4}` converts
+them to m²). :math:`\sigma_s(\eta, T)` is a cubic spline in :math:`T` per wavenumber
+(:class:`operators.tabulated.PiecewiseCubic` coefficients), so the model is C² in
+:math:`T`; :math:`B_\eta` is Planck's law (:mod:`operators.planck`), exact or as a spline in
+:math:`T` on refined nodes (``planck="table"``, relative error below ``planck_rtol``).
+
+**Forward sweep.** The kernel runs from the far end of each ray to the camera,
+:math:`I \leftarrow t_k I + B_k (1 - t_k)`, so one array of state per ray batch is updated in
+one fused pass over the spectra per segment. The sweep starts from :math:`I = I_\mathrm{bg}`,
+which the segments then attenuate by exactly the ray's transmittance :math:`\tau_\mathrm{ray}`.
+
+**Derivatives.** With :math:`P_k = \prod_{j<k} t_j` and
+:math:`I_{\le k} = \sum_{m \le k} B_m (1 - t_m) P_m`,
+
+.. math::
+
+    \frac{\partial I}{\partial B_k} = (1 - t_k) P_k, \qquad
+    \frac{\partial I}{\partial \tau_k} = t_k P_k B_k - (I - I_{\le k}), \qquad
+    \frac{\partial I}{\partial I_\mathrm{bg}} = \tau_\mathrm{ray},
+
+(:math:`I - I_{\le k}`, everything behind segment :math:`k`, holds the transmitted background,
+so the background enters the temperature and mole-fraction derivatives through
+:math:`\tau_\mathrm{ray}` with no term of its own)
+so the reverse sweep (a custom VJP) re-runs the segments in camera order, accumulating
+:math:`P_k` and :math:`I_{\le k}`, and needs only the final :math:`I` and arrays of one ray
+batch's spectra: no per-segment spectra are stored. The sums over wavenumber that turn these
+into cotangents of the per-segment weights are batched matrix-vector products; JAX then
+carries them to :math:`(T_k, X_{s,k}, \Delta s_k)` through the (scalar, per-segment)
+weights. Forward-mode derivatives (JVPs) run JAX's forward mode through the forward sweep,
+with the same memory.
+
+**Layout.** Rays are sorted by their number of segments and processed in batches
+(:mod:`operators.rte_batches`), each batch sweeping only as many segments as its longest ray.
+Per segment, :math:`\tau` and :math:`B` are sums of gathered rows of the spectral tables
+(:mod:`operators.rte_tables`) times per-segment weights (:math:`X_s \Delta s / T` times
+powers of the offset in the temperature interval). ``benchmarks/bench_rte.py`` times the
+kernel against a bare exponential.
+
+Entries of a ray after its last segment of non-zero length are padding: they contribute
+nothing, and their cotangents are zero.
+"""
+
+from __future__ import annotations
+
+from functools import partial
+
+import jax
+import jax.numpy as jnp
+
+from operators.planck import planck
+from operators.rte_batches import (
+    batch_rays_for,
+    batched_inputs,
+    from_batches,
+    ray_order,
+    spectra_batches,
+)
+from operators.rte_tables import RTETables
+
+
+# -- per-segment weights and one segment's spectra --------------------------------------------
+def _interval(tables: RTETables, temperature):
+    """Index of the temperature interval of each segment (clamped to the end intervals)."""
+    nodes = tables.nodes
+    return jnp.clip(jnp.searchsorted(nodes, temperature, side="right") - 1, 0,
+                    nodes.shape[0] - 2)
+
+
+def _segment_weights(tables: RTETables, index, temperature, fractions, length):
+    """Weights of the table rows in the optical depth and in the Planck radiance.
+
+    For segments shaped ``s`` (``temperature``, ``length``; ``fractions`` is
+    ``(n_absorbing, *s)``, the soot volume fraction last when the tables have soot):
+    ``w_tau`` ``(*s, 4 n_gas [+ 1])``, the coefficients of the rows ``X_s Δs / T · u^(3-j)``
+    (the table rows carry ``σ p 10⁻⁴/k_B``) and of the soot row, ``f_v Δs``; and ``w_emit``,
+    the powers ``u^(3-j)`` ``(*s, 4)`` for the Planck table or the temperature ``(*s, 1)`` for
+    the exact law.
+    """
+    u = (temperature - tables.nodes[index]) * tables.inv_width[index]
+    powers = jnp.stack([u**3, u**2, u, jnp.ones_like(u)], axis=-1)
+    gas = fractions[:-1] if tables.soot else fractions
+    amount = gas * (length / temperature)
+    w_tau = jnp.moveaxis(amount[..., None] * powers, 0, -2)
+    w_tau = w_tau.reshape(w_tau.shape[:-2] + (-1,))
+    if tables.soot:
+        w_tau = jnp.concatenate([w_tau, (fractions[-1] * length)[..., None]], axis=-1)
+    w_emit = powers if tables.planck == "table" else temperature[..., None]
+    return w_tau, w_emit
+
+
+def _spectra(tables: RTETables, index, w_tau, w_emit):
+    """Optical depth and Planck radiance (r, n_eta) of one segment of each ray of a batch.
+
+    One gather per table row: XLA fuses these into the elementwise sums.
+    """
+    n_tau = w_tau.shape[-1]
+    tau = sum(w_tau[:, c, None] * tables.coef[index, c] for c in range(n_tau))
+    if tables.planck == "table":
+        emission = sum(w_emit[:, j, None] * tables.coef[index, n_tau + j] for j in range(4))
+    else:
+        emission = planck(tables.wavenumber, w_emit)
+    return tau, emission
+
+
+def _spectra_cotangent(tables: RTETables, index, w_tau, w_emit, g_tau, g_emit):
+    """Cotangents of ``w_tau`` and ``w_emit`` from those of ``tau`` and ``B`` (r, n_eta).
+
+    The sums over wavenumber are batched matrix-vector products.
+    """
+    n_tau = w_tau.shape[-1]
+    contract = partial(jnp.einsum, "rn,rcn->rc", precision=jax.lax.Precision.HIGHEST)
+    d_tau = contract(g_tau, tables.coef[index, :n_tau])
+    if tables.planck == "table":
+        d_emit = contract(g_emit, tables.coef[index, n_tau:])
+    else:
+        slope = jax.jvp(partial(planck, tables.wavenumber), (w_emit,),
+                        (jnp.ones_like(w_emit),))[1]
+        d_emit = jnp.sum(g_emit * slope, axis=-1, keepdims=True)
+    return d_tau, d_emit
+
+
+@jax.custom_jvp
+def _transmission(tau):
+    r"""Transmittance :math:`e^{-\tau}` and absorptance :math:`1 - e^{-\tau}`, both accurate.
+
+    float64 uses ``expm1``; float32 a series below :math:`\tau = 0.1` (truncation below
+    2e-8) and :math:`1 - e^{-\tau}` above (rounding below 6e-7), cheaper than ``expm1``.
+    """
+    t = jnp.exp(-tau)
+    if tau.dtype == jnp.float64:
+        return t, -jnp.expm1(-tau)
+    series = 1.0 - tau / 6.0
+    for n in (5.0, 4.0, 3.0, 2.0):
+        series = 1.0 - tau / n * series
+    return t, jnp.where(tau < 0.1, tau * series, 1.0 - t)
+
+
+@_transmission.defjvp
+def _transmission_jvp(primals, tangents):
+    (tau,), (dtau,) = primals, tangents
+    t, a = _transmission(tau)
+    return (t, a), (-t * dtau, t * dtau)
+
+
+def _sweep(tables: RTETables, index, w_tau, w_emit, n_segments, background):
+    """Radiance (r, n_eta) of one ray batch, from the far end of the rays to the camera.
+
+    ``I ← t_k I + B_k (1 - t_k)`` for ``k = n_segments - 1, …, 0``, starting from the
+    background (r, n_eta), or from zero when it is None: one array of state, one fused pass
+    over the spectra per segment.
+    """
+    if background is None:
+        background = jnp.zeros((index.shape[-1], tables.n_eta), tables.dtype)
+
+    def step(j, radiance):
+        k = n_segments - 1 - j
+        tau, emission = _spectra(tables, index[k], w_tau[k], w_emit[k])
+        transmittance, absorptance = _transmission(tau)
+        return transmittance * radiance + emission * absorptance
+
+    return jax.lax.fori_loop(0, n_segments, step, background)
+
+
+def _sweep_vjp(tables: RTETables, index, w_tau, w_emit, n_segments, radiance, cotangent):
+    """Cotangents of one batch's weights, camera side first, from ``∂I/∂τ_k`` and ``∂I/∂B_k``,
+    and of its background, ``cotangent · τ_ray`` (``radiance`` includes the background)."""
+    zeros = jnp.zeros_like(radiance)
+
+    def step(k, carry):
+        partial_sum, transmittance, d_w_tau, d_w_emit = carry
+        tau, emission = _spectra(tables, index[k], w_tau[k], w_emit[k])
+        t, a = _transmission(tau)
+        absorbed = transmittance * a
+        partial_sum = partial_sum + emission * absorbed
+        transmittance = transmittance * t
+        g_tau = cotangent * (transmittance * emission - (radiance - partial_sum))
+        d_tau, d_emit = _spectra_cotangent(tables, index[k], w_tau[k], w_emit[k], g_tau,
+                                           cotangent * absorbed)
+        d_w_tau = jax.lax.dynamic_update_index_in_dim(d_w_tau, d_tau, k, 0)
+        d_w_emit = jax.lax.dynamic_update_index_in_dim(d_w_emit, d_emit, k, 0)
+        return partial_sum, transmittance, d_w_tau, d_w_emit
+
+    init = (zeros, zeros + 1, jnp.zeros_like(w_tau), jnp.zeros_like(w_emit))
+    _, transmittance, d_w_tau, d_w_emit = jax.lax.fori_loop(0, n_segments, step, init)
+    return d_w_tau, d_w_emit, cotangent * transmittance
+
+
+def _batch_radiance(tables: RTETables, temperature, fractions, length, n_segments,
+                    background=None):
+    index = _interval(tables, temperature)
+    return _sweep(tables, index,
+                  *_segment_weights(tables, index, temperature, fractions, length), n_segments,
+                  background)
+
+
+def _batch_cotangent(tables: RTETables, with_background: bool, temperature, fractions, length,
+                     n_segments, radiance, cotangent):
+    index = _interval(tables, temperature)
+    weights, to_fields = jax.vjp(partial(_segment_weights, tables, index),
+                                 temperature, fractions, length)
+    d_w_tau, d_w_emit, d_background = _sweep_vjp(tables, index, *weights, n_segments, radiance,
+                                                 cotangent)
+    return to_fields((d_w_tau, d_w_emit)), d_background if with_background else None
+
+
+# -- all rays: batches mapped, the reverse sweep as custom VJP --------------------------------
+def _radiance_impl(batch_rays, tables, fields, lengths, background=None):
+    order, n_segments = ray_order(lengths, batch_rays)
+    batches = batched_inputs(tables, fields, lengths, order, batch_rays)
+    if background is not None:
+        batches = (*batches, n_segments, spectra_batches(background, order, batch_rays))
+    else:
+        batches = (*batches, n_segments)
+    out = jax.lax.map(lambda b: _batch_radiance(tables, *b), batches)
+    return from_batches(out, order)
+
+
+@partial(jax.custom_vjp, nondiff_argnums=(0,))
+def _radiance(batch_rays, tables, fields, lengths, background=None):
+    return _radiance_impl(batch_rays, tables, fields, lengths, background)
+
+
+def _radiance_fwd(batch_rays, tables, fields, lengths, background=None):
+    radiance = _radiance_impl(batch_rays, tables, fields, lengths, background)
+    return radiance, (tables, fields, lengths, radiance, background)
+
+
+def _radiance_bwd(batch_rays, residuals, cotangent):
+    tables, fields, lengths, radiance, background = residuals
+    order, n_segments = ray_order(lengths, batch_rays)
+    batches, to_inputs = jax.vjp(
+        lambda f, s: batched_inputs(tables, f, s, order, batch_rays), fields, lengths)
+    spectra = tuple(spectra_batches(a, order, batch_rays) for a in (radiance, cotangent))
+    grads, d_background = jax.lax.map(
+        lambda b: _batch_cotangent(tables, background is not None, *b),
+        (*batches, n_segments, *spectra))
+    d_fields, d_lengths = to_inputs(grads)
+    d_background = None if background is None else from_batches(d_background, order)
+    return jax.tree_util.tree_map(jnp.zeros_like, tables), d_fields, d_lengths, d_background
+
+
+_radiance.defvjp(_radiance_fwd, _radiance_bwd)
+_radiance_jit = jax.jit(_radiance, static_argnums=0)
+
+
+def radiance_kernel(batch_rays: int, forward_mode: bool = False):
+    """The kernel as a JAX function ``radiance(tables, fields, lengths, background=None)``,
+    unchecked.
+
+    For building maps around the kernel (:class:`operators.emission_rte.KernelOperator`):
+    inputs as in :func:`emission_radiance`, already in the tables' dtype.
+
+    Parameters
+    ----------
+    batch_rays : int
+        Rays per batch (static).
+    forward_mode : bool, optional
+        False (default): reverse-mode differentiable through the memory-lean custom VJP (no
+        forward mode: JAX cannot push tangents through a custom VJP). True: forward-mode
+        differentiable, JAX's JVP through the forward sweep (no reverse mode: the sweep's
+        trip count is not static). Both give the same radiance.
+
+    Returns
+    -------
+    callable
+        ``radiance(tables, fields, lengths, background=None) -> (n_rays, n_eta)`` in
+        W/(m²·sr·cm⁻¹).
+    """
+    return partial(_radiance_impl if forward_mode else _radiance, int(batch_rays))
+
+
+def emission_radiance(tables: RTETables, fields, lengths, batch_rays: int | None = None,
+                      background=None):
+    """Spectral radiance leaving each ray's near end: the emission kernel, a JAX function.
+
+    Differentiable in reverse mode with a memory-lean custom VJP (w.r.t. ``fields``,
+    ``lengths`` and ``background``; the tables get zero cotangents) and in forward mode through
+    :func:`emission_radiance_jvp`. jit-compatible (``batch_rays`` must be static).
+
+    Parameters
+    ----------
+    tables : RTETables
+        Prepared spectral tables (:meth:`RTETables.from_spline`).
+    fields : jax.Array, shape (tables.n_fields, n_rays, n_seg)
+        Per segment temperature in K, then mole fractions (dimensionless), then, when the
+        tables have soot, the soot volume fraction (dimensionless); segments nearest the
+        camera first. Temperatures must be positive, also on padding.
+    lengths : jax.Array, shape (n_rays, n_seg)
+        Segment lengths in m; zero on padding.
+    batch_rays : int, optional
+        Rays per batch (default from :func:`batch_rays_for`).
+    background : jax.Array, shape (n_rays, n_eta) or (n_eta,), optional
+        Radiance behind each ray's far end in W/(m²·sr·cm⁻¹), seen through the ray's
+        transmittance (default None: none, as zero but without the cost).
+
+    Returns
+    -------
+    jax.Array, shape (n_rays, n_eta)
+        Spectral radiance in W/(m²·sr·cm⁻¹), in the tables' dtype.
+    """
+    fields, lengths, background = _check_inputs(tables, fields, lengths, background)
+    if batch_rays is None:
+        batch_rays = batch_rays_for(tables, lengths.shape[0])
+    return _radiance_jit(int(batch_rays), tables, fields, lengths, background)
+
+
+def emission_radiance_jvp(tables: RTETables, fields, lengths, d_fields, d_lengths,
+                          batch_rays: int | None = None, background=None):
+    """Radiance and its directional derivative (forward mode), memory as the forward.
+
+    Parameters
+    ----------
+    tables, fields, lengths, batch_rays, background
+        As in :func:`emission_radiance` (the background held fixed).
+    d_fields, d_lengths : jax.Array
+        Tangents, shaped as ``fields`` and ``lengths``.
+
+    Returns
+    -------
+    radiance, d_radiance : jax.Array, shape (n_rays, n_eta)
+        In W/(m²·sr·cm⁻¹) and W/(m²·sr·cm⁻¹) per unit of the tangent.
+    """
+    fields, lengths, background = _check_inputs(tables, fields, lengths, background)
+    if batch_rays is None:
+        batch_rays = batch_rays_for(tables, lengths.shape[0])
+    d_fields = jnp.asarray(d_fields, tables.dtype)
+    d_lengths = jnp.asarray(d_lengths, tables.dtype)
+    return _radiance_jvp_jit(int(batch_rays), tables, fields, lengths, d_fields, d_lengths,
+                             background)
+
+
+@partial(jax.jit, static_argnums=0)
+def _radiance_jvp_jit(batch_rays, tables, fields, lengths, d_fields, d_lengths, background):
+    return jax.jvp(lambda f, s: _radiance_impl(batch_rays, tables, f, s, background),
+                   (fields, lengths), (d_fields, d_lengths))
+
+
+def _check_inputs(tables: RTETables, fields, lengths, background=None):
+    fields = jnp.asarray(fields, tables.dtype)
+    lengths = jnp.asarray(lengths, tables.dtype)
+    n_fields = tables.n_fields
+    if fields.ndim != 3 or fields.shape[0] != n_fields:
+        soot = ", then the soot volume fraction" if tables.soot else ""
+        raise ValueError(
+            f"fields must have shape ({n_fields}, n_rays, n_seg) (T, then {tables.n_species} "
+            f"mole fractions{soot}); got {fields.shape}"
+        )
+    if lengths.shape != fields.shape[1:]:
+        raise ValueError(
+            f"lengths must have shape (n_rays, n_seg) = {fields.shape[1:]} to match fields; "
+            f"got {lengths.shape}"
+        )
+    return fields, lengths, check_background(tables, background, lengths.shape[0])
+
+
+def check_background(tables: RTETables, background, n_rays: int):
+    """A background radiance as ``(n_rays, n_eta)`` in the tables' dtype (None stays None).
+
+    Parameters
+    ----------
+    tables : RTETables
+        Give ``n_eta`` and the dtype.
+    background : array_like, shape (n_rays, n_eta) or (n_eta,), or None
+        Radiance in W/(m²·sr·cm⁻¹) behind each ray, or one spectrum for all rays.
+    n_rays : int
+        Number of rays.
+
+    Raises
+    ------
+    ValueError
+        For another shape, naming the expected ones.
+    """
+    if background is None:
+        return None
+    background = jnp.asarray(background, tables.dtype)
+    if background.shape not in ((tables.n_eta,), (n_rays, tables.n_eta)):
+        raise ValueError(
+            f"background must have shape (n_rays, n_eta) = {(n_rays, tables.n_eta)} or "
+            f"(n_eta,) = ({tables.n_eta},) in W/(m2 sr cm-1); got {background.shape}"
+        )
+    return jnp.broadcast_to(background, (n_rays, tables.n_eta))
+

@@ -1,0 +1,198 @@
+"""Runs from a measurement file and a rig file: no truth needed, the same numbers as in memory."""
+
+import json
+
+import numpy as np
+import pytest
+
+from invflame.cli import main
+from invflame.errors import ConfigError, InputDataError
+from invflame.experiments import config, runner
+from invflame.experiments.measurement import Measurement
+from invflame.geometry import VoxelGrid, paper_rig
+from invflame.geometry.rig_file import rig_records, write_rig
+from invflame.measurement_file import MeasurementFile, read_measurement, write_measurement
+
+SPECTRUM = {"min": 660.0, "max": 690.0, "step": 0.1}
+SOLVER = {"name": "adam", "iterations": 4, "options": {"lr": 0.01}}
+
+
+def toml(path, text):
+    path.write_text(text)
+    return path
+
+
+@pytest.fixture(scope="module")
+def simulated(tmp_path_factory):
+    """``invflame simulate`` of the synthetic flame on 4 paper cameras of 4 x 4 pixels, and a
+    rig file of the same cameras."""
+    folder = tmp_path_factory.mktemp("measured")
+    cfg = toml(folder / "simulate.toml", f"""
+[truth]
+source = "synthetic"
+grid = 8
+[rig]
+pixels = 4
+[spectrum]
+min = {SPECTRUM['min']}
+max = {SPECTRUM['max']}
+step = {SPECTRUM['step']}
+[solver]
+name = "adam"
+iterations = 4
+options = {{ lr = 0.01 }}
+""")
+    assert main(["simulate", str(cfg), "--out", str(folder / "m.nc")]) == 0
+    rig = write_rig(paper_rig(VoxelGrid.poolfire(8), n_pixels=4), folder / "rig.toml")
+    return folder, cfg, rig
+
+
+def test_simulate_writes_a_measurement_file_of_the_configured_rig(simulated):
+    folder, _, _ = simulated
+    measured = read_measurement(folder / "m.nc")
+    assert measured.measurement.data.shape == (4 * 16, measured.wavenumber.size)
+    assert measured.measurement.noisy and measured.resolution == 8.0
+    assert rig_records(measured.rig) == rig_records(paper_rig(VoxelGrid.poolfire(8), n_pixels=4))
+    assert (folder / "m.png").is_file()
+
+
+def test_a_file_run_without_truth_and_with_it_matches_the_in_memory_run(simulated, tmp_path,
+                                                                       monkeypatch):
+    folder, simulate_cfg, rig = simulated
+    monkeypatch.chdir(folder)
+    measured_cfg = toml(folder / "run.toml", f"""
+[truth]
+grid = 8
+[rig]
+file = "rig.toml"
+[data]
+source = "m.nc"
+[spectrum]
+min = {SPECTRUM['min']}
+max = {SPECTRUM['max']}
+step = {SPECTRUM['step']}
+""")
+    blind = config.load(measured_cfg)
+    assert blind["truth"]["source"] == "none"
+    blind["solver"] = dict(SOLVER)
+    summary = runner.run_experiment(blind, tmp_path / "blind", progress=False)
+    assert "mse" not in summary and summary["chi2_per_measurement"]["final"] > 0
+    assert not (tmp_path / "blind" / "truth.npz").exists()
+    assert summary["protocol"]["data"] == "measured, read from m.nc"
+
+    scored = dict(blind, truth={"source": "synthetic", "grid": 8})
+    from_file = runner.run_experiment(config.validate(scored), tmp_path / "file", progress=False)
+    in_memory = runner.run_experiment(config.load(simulate_cfg), tmp_path / "memory",
+                                      progress=False)
+    assert from_file["mse"] == in_memory["mse"]
+    assert from_file["chi2_per_measurement"] == in_memory["chi2_per_measurement"]
+    assert from_file["chi2_per_measurement"] == summary["chi2_per_measurement"]
+    saved = json.loads((tmp_path / "file" / "summary.json").read_text())
+    assert saved["mse"] == in_memory["mse"]
+    for name in ("reconstruction.npz", "data.npz"):
+        a, b = (np.load(tmp_path / run / name) for run in ("file", "memory"))
+        for key in a.files:
+            if a[key].dtype.kind == "f":
+                np.testing.assert_array_equal(a[key], b[key])
+
+
+def test_the_command_line_runs_from_the_file_alone(simulated, tmp_path, monkeypatch, capsys):
+    folder, _, _ = simulated
+    monkeypatch.chdir(folder)
+    cfg = toml(tmp_path / "run.toml", f"""
+[truth]
+grid = 8
+[data]
+source = "m.nc"
+[spectrum]
+min = {SPECTRUM['min']}
+max = {SPECTRUM['max']}
+step = {SPECTRUM['step']}
+[solver]
+name = "adam"
+iterations = 2
+""")
+    assert main(["run", str(cfg), "--out", str(tmp_path / "out"), "--quiet"]) == 0
+    assert "(no ground truth)" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(("settings", "message"), [
+    ({"truth": {"source": "none"}}, "'truth.source' = 'none' needs measured data"),
+    ({"data": {"source": "missing.nc"}}, "'data.source' = 'missing.nc' is not an existing"),
+    ({"data": {"source": "m.nc"}, "init": {"kind": "noisy-truth"}}, "needs a ground truth"),
+    ({"rig": {"file": "paper", "cameras": [{}]}}, "\\[rig\\] gives both 'file' and"),
+    ({"rig": {"cameras": [{"position": [0.0, 0.5, 0.0], "look_at": [1.0, 0.5, 0.0],
+                           "up": [0.0, 1.0, 0.0], "focal_length": 0.5,
+                           "sensor_size": [0.4, 0.4], "pixels": [4, 4]}]}},
+     "'rig.cameras': camera 0 at \\[0.0, 0.5, 0.0\\] m is inside the grid"),
+    ({"rig": {"cameras": [{"position": [2.0, 0.5, 0.0], "focal_length": 0.5,
+                           "sensor_size": [0.4, 0.4], "pixels": [4, 4]}]}},
+     "'rig.cameras': rig.cameras: camera 0: give exactly one of 'look_at'"),
+    ({"rig": {"cameras": {"position": 1}}}, "'rig.cameras' must be \\[\\[rig.cameras\\]\\] "
+                                           "tables"),
+    ({"rig": {"file": "nowhere.toml"}}, "'rig.file' = 'nowhere.toml': rig file not found"),
+])
+def test_bad_data_and_rig_settings_name_the_key(simulated, monkeypatch, settings, message):
+    monkeypatch.chdir(simulated[0])
+    with pytest.raises(ConfigError, match=message):
+        config.validate({"truth": {"grid": 8}, **settings})
+
+
+def test_inline_cameras_make_the_same_scene_as_the_rig_file(simulated, monkeypatch):
+    folder, _, rig = simulated
+    monkeypatch.chdir(folder)
+    cameras = rig_records(paper_rig(VoxelGrid.poolfire(8), n_pixels=4))
+    base = {"truth": {"grid": 8}, "spectrum": SPECTRUM}
+    inline = config.validate({**base, "rig": {"cameras": cameras}})
+    from_file = config.validate({**base, "rig": {"file": "rig.toml"}})
+    assert config.load(toml(folder / "inline.toml", config.dumps(inline))) == inline
+    a, b = (runner.build_scene(c) for c in (inline, from_file))
+    np.testing.assert_array_equal(a.segments.length, b.segments.length)
+    np.testing.assert_array_equal(a.segments.voxel, b.segments.voxel)
+
+
+def test_a_window_that_misses_the_measured_wavenumbers_is_named(simulated, monkeypatch):
+    monkeypatch.chdir(simulated[0])
+    cfg = config.validate({"truth": {"grid": 8}, "data": {"source": "m.nc"},
+                           "spectrum": {"min": 670.0, "max": 690.0, "step": 0.1}})
+    with pytest.raises(ConfigError, match="'data.source' = 'm.nc' measures 668-682 cm-1, "
+                                          "outside the window"):
+        runner.build_scene(cfg, measured=runner.read_data(cfg))
+
+
+def test_bad_pixels_leave_the_data_term_of_a_run(simulated, tmp_path, monkeypatch):
+    folder, _, _ = simulated
+    monkeypatch.chdir(folder)
+    measured = read_measurement("m.nc")
+    sigma = np.broadcast_to(measured.measurement.sigma, measured.measurement.data.shape).copy()
+    sigma[[5, 40]] = np.inf  # two bad pixels
+    data = np.where(np.isinf(sigma), 0.0, measured.measurement.data).astype(np.float32)
+    write_measurement(MeasurementFile(Measurement(data, sigma, True, {}), measured.rig,
+                                      measured.wavenumber, measured.resolution),
+                      tmp_path / "masked.nc")
+    base = {"truth": {"grid": 8}, "spectrum": SPECTRUM, "solver": SOLVER,
+            "data": {"source": str(tmp_path / "masked.nc")}}
+    masked = 2 * measured.wavenumber.size
+    with pytest.raises(ConfigError, match=f"masks {masked} values .* start from 'ambient'"):
+        runner.run_experiment(config.validate(base), tmp_path / "refused", progress=False)
+    summary = runner.run_experiment(config.validate({**base, "init": {"kind": "ambient"}}),
+                                    tmp_path / "run", progress=False)
+    assert summary["loss"]["final"] < summary["loss"]["initial"]
+    saved = np.load(tmp_path / "run" / "data.npz")
+    keep = np.isfinite(saved["sigma"])
+    chi2 = np.sum(((saved["simulated"] - saved["measured"]) / saved["sigma"])[keep] ** 2)
+    assert summary["chi2_per_measurement"]["final"] == pytest.approx(chi2 / keep.sum(),
+                                                                     rel=1e-6)
+    assert keep.sum() == (64 - 2) * measured.wavenumber.size
+
+
+def test_a_rig_stating_another_resolution_is_refused(simulated, monkeypatch):
+    folder, _, _ = simulated
+    monkeypatch.chdir(folder)
+    write_rig(paper_rig(VoxelGrid.poolfire(8), n_pixels=4), folder / "rig4.toml",
+              {"resolution": 4.0})
+    cfg = config.validate({"truth": {"grid": 8}, "spectrum": SPECTRUM,
+                           "rig": {"file": "rig4.toml"}})
+    with pytest.raises(InputDataError, match="resolution 4 cm-1 but \\[instrument\\] and "
+                                             "\\[spectrum\\] models 8 cm-1"):
+        runner.build_scene(cfg)

@@ -1,0 +1,84 @@
+"""Resume refuses a run folder whose truth, data or code changed; --force continues and says so."""
+
+import json
+
+import numpy as np
+import pytest
+
+from invflame.cli import main
+from invflame.experiments import config, runner
+
+TINY = {
+    "truth": {"grid": 8, "source": "synthetic"},
+    "rig": {"pixels": 4},
+    "spectrum": {"min": 660.0, "max": 690.0, "step": 0.1},
+    "solver": {"name": "adam", "iterations": 6, "options": {"lr": 0.01}},
+}
+
+
+def test_fingerprint_hashes_the_contents_and_describes_the_solver_options():
+    class Truth:
+        values = np.zeros((4, 2, 2, 2))
+
+    class Data:
+        data, sigma = np.ones((3, 5)), np.full((3, 5), 1e-3)
+
+    cfg = config.validate(TINY)
+    first = runner.run_fingerprint(cfg, Truth, Data)
+    assert first["solver options"].startswith("solvers.adam.AdamOptions(lr: float = 0.001")
+    assert runner.run_fingerprint(cfg, Truth, Data) == first
+    Data.data = Data.data.copy()
+    Data.data[1, 2] = np.nextafter(1.0, 2.0)  # one value, one unit in the last place
+    second = runner.run_fingerprint(cfg, Truth, Data)
+    assert second["data sha256"] != first["data sha256"]
+    assert second["truth sha256"] == first["truth sha256"]
+    assert runner.run_fingerprint(cfg, None, Data)["truth sha256"] is None
+
+
+def test_resume_refuses_changed_data_and_code_and_force_records_them(tmp_path, capsys):
+    cfg = config.validate(dict(TINY, solver=dict(TINY["solver"], iterations=3)))
+    runner.run_experiment(cfg, tmp_path, progress=False)
+    (tmp_path / "summary.json").unlink()  # as if killed after its last checkpoint
+    saved = json.loads((tmp_path / "fingerprint.json").read_text())
+    assert set(saved) == {"truth sha256", "data sha256", "invflame version", "solver options"}
+    tampered = dict(saved, **{"data sha256": "0" * 64, "invflame version": "0.0.1"})
+    (tmp_path / "fingerprint.json").write_text(json.dumps(tampered))
+    longer = config.validate(TINY)
+
+    with pytest.raises(config.ConfigError) as err:
+        runner.run_experiment(longer, tmp_path, resume=True, progress=False)
+    message = str(err.value)
+    assert f"data sha256: '{'0' * 64}' there, '{saved['data sha256']}' now" in message
+    assert f"invflame version: '0.0.1' there, '{saved['invflame version']}' now" in message
+    assert "truth sha256" not in message and "--force" in message
+
+    (tmp_path / "run.toml").write_text(config.dumps(longer))
+    assert main(["run", str(tmp_path / "run.toml"), "--out", str(tmp_path), "--force",
+                 "--quiet"]) == 2
+    assert "--force only applies to --resume" in capsys.readouterr().err
+    assert main(["run", str(tmp_path / "run.toml"), "--out", str(tmp_path), "--resume",
+                 "--force", "--quiet"]) == 0
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["iterations"] == 6
+    resumed = summary["resumed"]
+    assert resumed["from_iteration"] == 3 and resumed["exact"] and resumed["forced"]
+    assert [c.split(":")[0] for c in resumed["changed"]] == ["data sha256", "invflame version"]
+    log = (tmp_path / "log.txt").read_text()
+    assert "resumed with --force although what defines the run changed: data sha256" in log
+    assert json.loads((tmp_path / "fingerprint.json").read_text()) == saved  # the run's own now
+
+
+def test_the_summary_says_a_run_was_resumed_inexactly(tmp_path):
+    """SciPy's L-BFGS-B restarts its memory on resume (``exact_resume`` False): the summary of
+    a resumed run says from which iteration it continued and that the continuation is not
+    the uninterrupted run's; a run done in one go says it was not resumed."""
+    lbfgs = {"name": "lbfgs", "iterations": 6, "options": {"pgtol": 0.0, "ftol": 0.0}}
+    cfg = config.validate(dict(TINY, solver=lbfgs))
+    runner.run_experiment(config.validate(dict(TINY, solver=dict(lbfgs, iterations=3))),
+                          tmp_path, progress=False)
+    assert json.loads((tmp_path / "summary.json").read_text())["resumed"] is None
+    (tmp_path / "summary.json").unlink()
+    summary = runner.run_experiment(cfg, tmp_path, resume=True, progress=False)
+    assert summary["resumed"] == {"from_iteration": 3, "exact": False, "forced": False,
+                                  "changed": []}
+    assert summary["iterations"] > 3

@@ -1,0 +1,118 @@
+"""Emission kernel in front of a background: I = I_flame + tau_ray I_bg, its derivatives, a slab."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from rte_reference import random_rays, reference_radiance, synthetic_sigma
+
+import operators as op
+from operators.emission_rte import EmissionRTE, RTETables, emission_radiance
+from operators.planck import BOLTZMANN, planck
+from operators.tabulated import PiecewiseCubic
+
+ETA, NODES, SIGMA = synthetic_sigma(n_eta=40)
+SPLINE = PiecewiseCubic(NODES, SIGMA)
+P = 101325.0
+SCALE = np.array([30.0, 0.01, 0.01, 0.01])[:, None, None]
+
+
+def wall(n_rays, seed=3):
+    """A different grey-body background per ray, W/(m2 sr cm-1)."""
+    rng = np.random.default_rng(seed)
+    return rng.uniform(0.3, 0.9, (n_rays, 1)) * planck(ETA, rng.uniform(300, 900, (n_rays, 1)))
+
+
+def reference_transmittance(fields, lengths):
+    """exp(-sum_k kappa_k ds_k) per ray and wavenumber, from the float64 reference."""
+    kappa = np.einsum("srk,rkse->rke", fields[1:], SPLINE(fields[0]))
+    kappa *= (P / (BOLTZMANN * fields[0]) * 1e-4)[..., None]
+    return np.exp(-np.sum(kappa * lengths[..., None], axis=1))
+
+
+def test_background_is_added_through_the_ray_transmittance():
+    fields, lengths = random_rays(n_rays=5, n_seg=6, seed=11)
+    background = wall(5)
+    tables = RTETables.from_spline(ETA, NODES, SPLINE.coef, P, np.float64, "exact")
+    ours = emission_radiance(tables, fields, lengths, 2, background)
+    flame = reference_radiance(ETA, NODES, SIGMA, fields, lengths, P)
+    expected = flame + reference_transmittance(fields, lengths) * background
+    np.testing.assert_allclose(ours, expected, rtol=1e-12)
+
+
+def test_no_background_leaves_the_numbers_unchanged():
+    fields, lengths = random_rays(n_rays=5, n_seg=6, seed=12)
+    plain = EmissionRTE(ETA, NODES, SPLINE.coef, lengths, P, np.float32, "table")
+    zero = EmissionRTE(ETA, NODES, SPLINE.coef, lengths, P, np.float32, "table",
+                       background=np.zeros(ETA.size))
+    assert plain.background is None
+    np.testing.assert_array_equal(plain(fields), zero(fields))
+
+
+@pytest.mark.parametrize("planck_mode", ["exact", "table"])
+def test_jacobian_dot_and_taylor_tests_with_background(planck_mode):
+    fields, lengths = random_rays(n_rays=5, n_seg=7, seed=13)
+    rte = EmissionRTE(ETA, NODES, SPLINE.coef, lengths, P, np.float64, planck_mode,
+                      batch_rays=2, background=wall(5))
+    direction = np.random.default_rng(4).standard_normal(fields.shape) * SCALE
+    dot = op.jacobian_dottest(rte, fields, rtol=1e-10)
+    assert dot.passed, dot
+    taylor = op.taylor_test(rte, fields, direction, h0=1.0)
+    assert taylor.passed, taylor
+    assert abs(taylor.rate0 - 1) < 0.05 and taylor.rate1 > 1.9
+
+
+def test_background_cotangent_is_the_ray_transmittance():
+    """The reverse sweep's cotangent of I_bg is w * tau_ray, and the fields' cotangents match
+    plain autodiff of the whole-array formulation with background."""
+    fields, lengths = random_rays(n_rays=6, n_seg=8, seed=5)
+    lengths = np.where(lengths > 0, lengths, 0.004)
+    background = wall(6)
+    tables = RTETables.from_spline(ETA, NODES, SPLINE.coef, P, np.float64, "exact")
+    weights = jnp.asarray(np.random.default_rng(1).standard_normal((6, ETA.size)))
+
+    def plain(f, s, b):
+        sigma = SPLINE(f[0])
+        kappa = jnp.einsum("srk,rkse->rke", f[1:], sigma) * (P / (BOLTZMANN * f[0]) * 1e-4)[
+            ..., None]
+        tau = kappa * s[..., None]
+        before = jnp.cumsum(tau, axis=1) - tau
+        emission = planck(jnp.asarray(ETA), f[0][..., None])
+        return (jnp.sum(emission * -jnp.expm1(-tau) * jnp.exp(-before), axis=1)
+                + jnp.exp(-jnp.sum(tau, axis=1)) * b)
+
+    args = tuple(jnp.asarray(a) for a in (fields, lengths, background))
+    ours = jax.grad(lambda f, s, b: jnp.sum(weights * emission_radiance(tables, f, s, 4, b)),
+                    argnums=(0, 1, 2))(*args)
+    theirs = jax.grad(lambda f, s, b: jnp.sum(weights * plain(f, s, b)), argnums=(0, 1, 2))(*args)
+    np.testing.assert_allclose(ours[2], weights * reference_transmittance(fields, lengths),
+                               rtol=1e-12)
+    for mine, other in zip(ours, theirs, strict=True):
+        np.testing.assert_allclose(mine, other, rtol=1e-10, atol=1e-12 * np.abs(other).max())
+
+
+@pytest.mark.parametrize("planck_mode", ["exact", "table"])
+def test_uniform_slab_in_front_of_a_black_body_wall(planck_mode):
+    r"""B(T)(1 - e^{-kappa L}) + e^{-kappa L} eps B(T_wall) for a slab of uniform gas."""
+    sigma = np.broadcast_to(SIGMA[2:3], SIGMA.shape).copy()  # cross-sections constant in T
+    spline = PiecewiseCubic(NODES, sigma)
+    temperature, x_co2, length, n_seg = 1400.0, 0.08, 0.3, 12
+    t_wall, emissivity = 650.0, 0.85
+    fields = np.zeros((4, 1, n_seg))
+    fields[0], fields[1] = temperature, x_co2
+    lengths = np.full((1, n_seg), length / n_seg)
+    background = emissivity * planck(ETA, t_wall)
+    rte = EmissionRTE(ETA, NODES, spline.coef, lengths, P, np.float64, planck_mode,
+                      background=background)
+    kappa = x_co2 * P / (BOLTZMANN * temperature) * sigma[0, 0] * 1e-4  # m-1
+    transmittance = np.exp(-kappa * length)
+    expected = planck(ETA, temperature) * (1 - transmittance) + transmittance * background
+    assert np.ptp(transmittance) > 0.3  # optically thin and thick wavenumbers both
+    rtol = 1e-12 if planck_mode == "exact" else 1e-6  # the Planck spline's tolerance
+    np.testing.assert_allclose(rte(fields)[0], expected, rtol=rtol)
+
+
+def test_bad_background_shape_is_named():
+    fields, lengths = random_rays(n_rays=3, n_seg=4)
+    with pytest.raises(ValueError, match=r"background must have shape \(n_rays, n_eta\)"):
+        EmissionRTE(ETA, NODES, SPLINE.coef, lengths, P, np.float64, background=np.ones(3))
