@@ -15,9 +15,7 @@ from operators.base import (
     Operator,
     TorchOperator,
     aslinearoperator,
-    block_diag,
     precision,
-    vstack,
 )
 from operators.checks import (
     dottest,
@@ -25,6 +23,7 @@ from operators.checks import (
     jacobian_dottest,
     taylor_test,
 )
+from operators.combinators import block_diag, vstack
 from operators.derivatives import D_x, D_y, D_z, Gradient, derivative
 from operators.diagonal import Diagonal
 from operators.emission_rte import (

@@ -15,10 +15,11 @@ There is one way to write an operator, on arrays already shaped ``dims`` / ``dim
   ``A.H`` is the adjoint as an operator and ``A.adjoint(y)`` applies it.
 
 The algebra follows the chain rule: ``A @ B`` (composition, ``B`` applied first), ``A + B``,
-``A - B``, ``c * A``, ``-A``, ``A ** p``, ``A.T``, :func:`vstack` and :func:`block_diag`; every
-one returns an operator of this module, linear when all its parts are. A combination
-linearizes each part once per point: the Jacobian of ``A + B`` at ``x`` is the sum of the
-parts' Jacobians at ``x``, built once, and so on for every combinator.
+``A - B``, ``c * A``, ``-A``, ``A ** p``, ``A.T``, and the stacks
+:func:`~operators.combinators.vstack` and :func:`~operators.combinators.block_diag`
+(:mod:`operators.combinators`); every one returns an operator, linear when all its parts
+are. A combination linearizes each part once per point: the Jacobian of ``A + B`` at ``x``
+is the sum of the parts' Jacobians at ``x``, built once, and so on for every combinator.
 
 **Shapes are checked.** An input must have the operator's shape (``dims`` for ``x`` and ``v``,
 ``dimsd`` for ``w``); a linear operator also takes the flat vector of as many elements, the
@@ -521,100 +522,6 @@ class Scaled(_Combination):
         return [self.scale * w]
 
 
-def _stacked_shape(shapes: Sequence[tuple[int, ...]]) -> tuple[int, ...]:
-    """``(n, *shape)`` when all blocks share a shape, else the flat concatenated size."""
-    if all(s == shapes[0] for s in shapes):
-        return (len(shapes), *shapes[0])
-    return (sum(_size(s) for s in shapes),)
-
-
-def _split(x: np.ndarray, shapes: Sequence[tuple[int, ...]]) -> list[np.ndarray]:
-    sizes = [_size(s) for s in shapes]
-    parts = np.split(np.ravel(x), np.cumsum(sizes)[:-1])
-    return [p.reshape(s) for p, s in zip(parts, shapes, strict=True)]
-
-
-def _join(parts: Sequence[np.ndarray], shape: tuple[int, ...]) -> np.ndarray:
-    return np.concatenate([np.ravel(p) for p in parts]).reshape(shape)
-
-
-def _check_blocks(ops, what):
-    ops = list(ops)
-    if not ops:
-        raise ValueError(f"{what} needs at least one operator")
-    bad = [type(op).__name__ for op in ops if not isinstance(op, Operator)]
-    if bad:
-        raise TypeError(f"{what} blocks must be operators.Operator (wrap pylops operators with "
-                        f"operators.aslinearoperator); got {', '.join(bad)}")
-    return ops
-
-
-class VStack(_Combination):
-    r"""Vertical stack :math:`x \mapsto (A_1(x), \dots, A_n(x))` of operators on one input.
-
-    The output has shape ``(n, *dimsd)`` when all blocks share ``dimsd``, else it is the flat
-    concatenation of the blocks' outputs (:meth:`split` and :meth:`join` convert).
-    """
-
-    def __init__(self, ops: Sequence[Operator], name: str | None = None):
-        ops = _check_blocks(ops, "VStack")
-        if any(op.dims != ops[0].dims for op in ops):
-            raise ValueError("VStack blocks must share their input shape: got "
-                             + ", ".join(str(op.dims) for op in ops))
-        super().__init__(ops[0].dims, _stacked_shape([op.dimsd for op in ops]),
-                         dtype=np.result_type(*[op.dtype for op in ops]),
-                         name=name or "VStack[" + ", ".join(op.name for op in ops) + "]")
-        self.parts = tuple(ops)
-
-    def split(self, y) -> list[np.ndarray]:
-        """An output of the stack as its blocks, each shaped like its operator's ``dimsd``."""
-        return _split(self._as_output(y, "y"), [op.dimsd for op in self.parts])
-
-    def join(self, blocks) -> np.ndarray:
-        """Blocks shaped like the operators' ``dimsd`` as one output of the stack."""
-        blocks = [op._as_output(b, "block") for op, b in zip(self.parts, blocks, strict=True)]
-        return _join(blocks, self.dimsd)
-
-    def _rebuild(self, parts):
-        return VStack(parts, name=self.name)
-
-    def _assemble(self, outputs):
-        return _join(outputs, self.dimsd)
-
-    def _cotangents(self, w):
-        return _split(w, [op.dimsd for op in self.parts])
-
-
-class BlockDiag(_Combination):
-    """Block-diagonal operator: block ``i`` acts on part ``i`` of the input.
-
-    Input and output have shape ``(n, *dims)`` / ``(n, *dimsd)`` when all blocks share their
-    shapes (e.g. one operator per field), else flat concatenations.
-    """
-
-    def __init__(self, ops: Sequence[Operator], name: str | None = None):
-        ops = _check_blocks(ops, "BlockDiag")
-        super().__init__(_stacked_shape([op.dims for op in ops]),
-                         _stacked_shape([op.dimsd for op in ops]),
-                         dtype=np.result_type(*[op.dtype for op in ops]),
-                         name=name or "BlockDiag[" + ", ".join(op.name for op in ops) + "]")
-        self.parts = tuple(ops)
-
-    def _rebuild(self, parts):
-        return BlockDiag(parts, name=self.name)
-
-    def _inputs(self, x):
-        return _split(x, [op.dims for op in self.parts])
-
-    def _gather(self, grads):
-        return _join(grads, self.dims)
-
-    def _assemble(self, outputs):
-        return _join(outputs, self.dimsd)
-
-    def _cotangents(self, w):
-        return _split(w, [op.dimsd for op in self.parts])
-
 
 class _LinearView(LinearOperator):
     """A combination of linear operators seen as one :class:`LinearOperator`.
@@ -622,7 +529,8 @@ class _LinearView(LinearOperator):
     Attributes
     ----------
     combination : Operator
-        The combination itself (e.g. a :class:`VStack`, for its ``split``/``join``).
+        The combination itself (e.g. a :class:`~operators.combinators.VStack`, for its
+        ``split``/``join``).
     """
 
     def __init__(self, op: Operator):
@@ -641,31 +549,6 @@ def _linear_if_possible(op: Operator) -> Operator:
     part is linear, else unchanged."""
     return _LinearView(op) if all(p.linear for p in op.parts) else op
 
-
-def vstack(ops: Sequence[Operator], name: str | None = None) -> Operator:
-    """Stack operators vertically (:class:`VStack`); linear if all blocks are.
-
-    Parameters
-    ----------
-    ops : sequence of Operator
-        Blocks sharing their input shape.
-    name : str, optional
-        Label for messages.
-    """
-    return _linear_if_possible(VStack(ops, name=name))
-
-
-def block_diag(ops: Sequence[Operator], name: str | None = None) -> Operator:
-    """Block-diagonal combination (:class:`BlockDiag`); linear if all blocks are.
-
-    Parameters
-    ----------
-    ops : sequence of Operator
-        Blocks, each acting on its own part of the input.
-    name : str, optional
-        Label for messages.
-    """
-    return _linear_if_possible(BlockDiag(ops, name=name))
 
 
 class _PylopsWrapper(LinearOperator):

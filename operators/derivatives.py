@@ -13,7 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from operators.base import LinearOperator, aslinearoperator, vstack
+from operators.base import LinearOperator, aslinearoperator
+from operators.combinators import vstack
 from operators.pylops_import import pylops
 
 _AXES = {"x": 1, "y": 2, "z": 3}

@@ -52,7 +52,8 @@ def stacked_operator(evaluation, use_regularizer: bool):
     -------
     operators.LinearOperator
         From the parameters to the stacked dual space; ``.combination`` is the
-        :class:`operators.base.VStack` whose ``split``/``join`` convert its outputs to blocks.
+        :class:`operators.combinators.VStack` whose ``split``/``join`` convert its outputs to
+        blocks.
     """
     blocks = [evaluation.forward_jacobian]
     if use_regularizer:

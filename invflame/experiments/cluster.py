@@ -214,7 +214,7 @@ def warm_table_cache(jobs: Sequence[Job]) -> None:
     A table that cannot be built is left to the runs that need it, which then fail and are
     reported like any other failure.
     """
-    from invflame.experiments.runner import absorption_table
+    from invflame.experiments.inputs import absorption_table
 
     spectra = {json.dumps(job.config["spectrum"], sort_keys=True): job.config for job in jobs}
     for config in spectra.values():

@@ -336,15 +336,9 @@ def reproduce(preset: str = "quick", out_dir="results", resume: bool = False,
         The table rows (also written as ``table.csv``/``.json``/``.md``).
     """
     from invflame.experiments.figures import comparison_figures
-    from invflame.experiments.runner import (
-        absorption_table,
-        build_scene,
-        check_resumable,
-        initial_fields,
-        load_truth,
-        measure,
-        run_experiment,
-    )
+    from invflame.experiments.inputs import absorption_table, load_truth
+    from invflame.experiments.resume import check_resumable
+    from invflame.experiments.runner import build_scene, initial_fields, measure, run_experiment
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

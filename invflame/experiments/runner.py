@@ -44,9 +44,6 @@ the wavenumbers).
 
 from __future__ import annotations
 
-import dataclasses
-import hashlib
-import importlib.metadata
 import time
 from pathlib import Path
 
@@ -58,28 +55,44 @@ from invflame.background import background_from_config
 from invflame.experiments import config as configuration
 from invflame.experiments.data_start import band_tomography_start
 from invflame.experiments.initialization import ambient, noisy_truth
+from invflame.experiments.inputs import absorption_table, load_truth, read_data
 from invflame.experiments.measurement import (
     Measurement,
     simulate_measurement,
     synthesis_scene,
 )
-from invflame.experiments.metrics import field_scores, peak_memory_mb, psnr
+from invflame.experiments.metrics import peak_memory_mb
+from invflame.experiments.parameters import (
+    make_representation,
+    physical_fields,
+    starting_parameters,
+)
+from invflame.experiments.regularization import choose_lambda, regularizer_weight
+from invflame.experiments.resume import (
+    FINGERPRINT,
+    FORCE_HINT,
+    check_fingerprint,
+    check_resumable,
+    run_fingerprint,
+)
 from invflame.experiments.run_folder import RunLock
+from invflame.experiments.summaries import chi2_per_value, protocol, truth_scores
 from invflame.export import export_run
 from invflame.field import Field
 from invflame.geometry import VoxelGrid, paper_rig, ray_coverage
 from invflame.geometry.rig_file import check_instrument
-from invflame.measurement_file import MeasurementFile, read_measurement
-from invflame.phantoms import make_phantom
+from invflame.measurement_file import MeasurementFile
 from invflame.phantoms.plume import plume_soot
-from invflame.representations.neural import NeuralCentresRepresentation, NeuralFieldRepresentation
-from invflame.representations.normalization import physical_bounds
-from invflame.representations.voxel import VoxelRepresentation
 from invflame.scene import Scene
-from invflame.spectroscopy.absorption_table import AbsorptionTable, default_linelists
+from invflame.spectroscopy.absorption_table import AbsorptionTable
+
+__all__ = ["CHECKPOINT_EVERY", "FINGERPRINT", "FORCE_HINT", "Log", "absorption_table",
+           "build_scene", "check_fingerprint", "check_resumable", "chi2_per_value",
+           "choose_lambda", "initial_fields", "load_truth", "make_representation", "measure",
+           "physical_fields", "protocol", "read_data", "regularizer_weight", "run_experiment",
+           "run_fingerprint", "starting_parameters", "truth_scores"]
 
 CHECKPOINT_EVERY = 10
-FINGERPRINT = "fingerprint.json"
 
 
 class Log:
@@ -94,23 +107,6 @@ class Log:
             handle.write(line + "\n")
         if self.echo:
             print(line, flush=True)
-
-
-def absorption_table(cfg: dict, step: float | None = None) -> AbsorptionTable:
-    """The absorption table for the configuration's spectral window (cached on disk).
-
-    Parameters
-    ----------
-    cfg : dict
-        Validated configuration.
-    step : float, optional
-        Line-by-line step in cm⁻¹ (default ``spectrum.step``).
-    """
-    wavenumber = configuration.line_by_line_grid(cfg["spectrum"], step)
-    return AbsorptionTable.cached(default_linelists(wavenumber), wavenumber=wavenumber,
-                                  pressure=cfg["spectrum"]["pressure"])
-
-
 def build_scene(cfg: dict, table: AbsorptionTable | None = None,
                 measured: MeasurementFile | None = None) -> Scene:
     """The reconstruction scene of a configuration: grid, rig, sub-rays, table, instrument,
@@ -158,44 +154,6 @@ def build_scene(cfg: dict, table: AbsorptionTable | None = None,
     return Scene(grid, rig, table, resolution=resolution, out_wavenumber=out_wavenumber,
                  rays_per_pixel=cfg["rig"]["rays_per_pixel"],
                  background=background_from_config(cfg["background"]))
-
-
-def read_data(cfg: dict) -> MeasurementFile | None:
-    """The measurement file of ``data.source`` (None when the data are simulated), checked
-    against the configuration's rig when it names one (``rig.file`` or ``rig.cameras``)."""
-    source = cfg["data"]["source"]
-    if not source:
-        return None
-    spec = configuration.rig_spec(cfg)
-    where = f"the rig file {cfg['rig']['file']}" if cfg["rig"]["file"] else "rig.cameras"
-    return read_measurement(source, rig=None if spec is None else spec.rig, rig_source=where)
-
-
-def load_truth(cfg: dict, grid: VoxelGrid | None = None) -> Field | None:
-    """The ground truth named by ``truth.source``: a phantom name or a field ``.npz`` file;
-    None for ``"none"`` (measured data without a truth).
-
-    Parameters
-    ----------
-    cfg : dict
-        Validated configuration.
-    grid : VoxelGrid, optional
-        Resample onto this grid; default: the truth's native grid (the pool fire's 60³ cells,
-        the synthetic plume's default 60³ grid, a file's own grid).
-    """
-    source = cfg["truth"]["source"]
-    if source == "none":
-        return None
-    if source in ("poolfire", "synthetic"):
-        field = make_phantom(source)
-    else:
-        path = Path(source)
-        if not path.is_file():
-            raise FileNotFoundError(
-                f"truth.source {source!r} is neither 'poolfire', 'synthetic' nor an existing file"
-            )
-        field = Field.load(path)
-    return field if grid is None else field.resample(grid)
 
 
 def measure(cfg: dict, scene: Scene, truth: Field) -> Measurement:
@@ -247,275 +205,6 @@ def initial_fields(cfg: dict, truth: Field, scene: Scene, measurement: Measureme
                                      ambient=init["ambient"]).astype(np.float32)
     return noisy_truth(truth.values, init["noise"], seed=cfg["seed"])
 
-
-def protocol(cfg: dict, measurement: Measurement) -> dict[str, str]:
-    """What made a result, in words: the start, the data, the noise and the weight λ."""
-    init, data, reg = cfg["init"], cfg["data"], cfg["regularizer"]
-    starts = {"band-tomography": "data-driven (band-integrated linear tomography + "
-                                 "Burke-Schumann state relation); knows nothing of the truth",
-              "ambient": "ambient air; knows nothing of the truth",
-              "noisy-truth": f"ground truth + {init['noise']:g} relative Gaussian noise (the "
-                             "paper's protocol: starts from the answer)"}
-    record = measurement.provenance
-    if data["source"]:
-        made = f"measured, read from {data['source']}"
-    elif data["inverse_crime"]:
-        made = "inverse crime: the reconstruction's own grid, sub-rays and line-by-line step"
-    else:
-        made = (f"truth on its {'x'.join(map(str, record['grid']))} grid, "
-                f"{record['rays_per_pixel']} sub-rays/pixel, line-by-line step "
-                f"{record['step_cm-1']:g} cm-1")
-    noise = cfg["noise"]
-    if not measurement.noisy:
-        said = "none (noise-free data)"
-    elif data["source"]:
-        sigma = measurement.sigma[np.isfinite(measurement.sigma)]
-        said = (f"from the file: sigma {sigma.min():.3g}-{sigma.max():.3g} W/(m2 sr cm-1); "
-                f"{measurement.data.size - measurement.n_measurements} masked values")
-    elif noise["kind"] == "snr":
-        said = f"Gaussian, peak SNR {noise['snr']:g}"
-    else:
-        said = (f"Gaussian, NESR {noise['nesr']} W/(m2 sr cm-1) (peak SNR "
-                f"{record['peak_snr']:.0f})")
-    return {"start": starts[init["kind"]], "data": made, "noise": said,
-            "lambda": f"{reg['lambda']} ({reg['scaling']} scaling)"}
-
-
-def regularizer_weight(cfg: dict, scene: Scene, measurement: Measurement, lam: float) -> float:
-    """The solver's weight of the regularizer for a configured λ (see the module docstring):
-    λ·M under ``"chi2"`` scaling (:func:`solvers.problem_weight`), λ·R (pixels) under
-    ``"paper"``."""
-    if cfg["regularizer"]["scaling"] == "paper":
-        return lam * scene.n_rays
-    return solvers.problem_weight(lam, measurement.n_measurements)
-
-
-def choose_lambda(cfg: dict, representation, measurement: Measurement, x0, out: Path,
-                  log) -> solvers.ParameterChoice:
-    """λ by Morozov's discrepancy principle (:func:`solvers.discrepancy_principle`).
-
-    Every trial solves the configured problem from ``x0`` with the configured solver and
-    stopping rules; the choice and all trials go to ``lambda_choice.json`` and
-    ``l_curve.png`` in ``out``.
-
-    Parameters
-    ----------
-    cfg : dict
-        Validated configuration (``regularizer.lambda_range``, ``regularizer.tau``).
-    representation : VoxelRepresentation, NeuralFieldRepresentation, ...
-        Gives the problem for each λ.
-    measurement : Measurement
-        Data and noise σ.
-    x0 : ndarray
-        Starting parameters of every trial.
-    out : Path
-        Output folder.
-    log : callable
-        Receives one line per trial.
-    """
-    reg, solver = cfg["regularizer"], cfg["solver"]
-    m = measurement.n_measurements
-    per_epoch = representation.iterations_per_epoch
-
-    def solve_at(lam):
-        problem = representation.problem(measurement.data, regularizer=reg["kind"],
-                                         lam=solvers.problem_weight(lam, m), x0=x0,
-                                         sigma=measurement.sigma)
-        result = solvers.solve(problem, solver["name"],
-                               max_iter=solver["iterations"] * per_epoch, seed=cfg["seed"],
-                               **solver["options"])
-        final = problem.evaluate(result.x)
-        log(f"lambda {lam:.4g}: chi2/M {final.misfit / m:.4g}, Phi {final.regularizer:.4g} "
-            f"after {result.iterations} iterations ({result.stop_reason})")
-        return result.x, final.misfit, final.regularizer
-
-    low, high = reg["lambda_range"]
-    choice = solvers.discrepancy_principle(solve_at, m, high, low, tau=reg["tau"], refine=2)
-    write_json(out / "lambda_choice.json", choice.as_dict())
-    solvers.plot_l_curve(choice, out / "l_curve.png")
-    log(choice.message)
-    return choice
-
-
-def make_representation(cfg: dict, scene: Scene):
-    """The representation named by ``representation.kind`` on the scene."""
-    settings, kind = cfg["representation"], cfg["representation"]["kind"]
-    network = {"n_frequencies": settings["frequencies"], "hidden": settings["hidden"],
-               "depth": settings["depth"], "seed": cfg["seed"]}
-    if kind == "neural-field":
-        return NeuralFieldRepresentation(scene, n_coarse=settings["coarse_samples"],
-                                         n_fine=settings["fine_samples"],
-                                         batch_rays=settings["rays_per_batch"], **network)
-    if kind == "neural-centres":
-        return NeuralCentresRepresentation(scene, **network)
-    return VoxelRepresentation(scene.grid, scene.operator, temperature_range=_t_range(scene))
-
-
-def starting_parameters(cfg: dict, representation, start: np.ndarray, progress: bool):
-    """Parameters of the starting fields: normalized voxels, or networks pretrained on them."""
-    if representation.kind == "voxel":
-        return representation.initial_parameters(start)
-    return representation.initial_parameters(
-        start, iterations=cfg["representation"]["pretrain_iterations"], seed=cfg["seed"],
-        progress=progress)
-
-
-def physical_fields(scene: Scene, fields: np.ndarray) -> np.ndarray:
-    """Fields clipped to the physical bounds, mole fractions scaled to sum to at most 1."""
-    lower, upper = physical_bounds(*_t_range(scene))
-    fields = np.clip(fields, lower.reshape(4, 1, 1, 1), upper.reshape(4, 1, 1, 1))
-    fields[1:] /= np.maximum(fields[1:].sum(axis=0), 1.0)  # a network may exceed sum(X) = 1
-    return fields
-
-
-def _differences(a: dict, b: dict, where: str = "") -> list[str]:
-    keys = sorted(set(a) | set(b))
-    out = []
-    for key in keys:
-        path = f"{where}.{key}" if where else key
-        if isinstance(a.get(key), dict) and isinstance(b.get(key), dict) and key != "options":
-            out += _differences(a[key], b[key], path)
-        elif a.get(key) != b.get(key):
-            out.append(f"{path}: {a.get(key)!r} there, {b.get(key)!r} now")
-    return out
-
-
-def check_resumable(cfg: dict, folder, force: bool = False) -> list[str]:
-    """Refuse to resume a run folder written under another configuration (a larger iteration
-    limit is allowed: it continues the run).
-
-    Parameters
-    ----------
-    cfg : dict
-        Validated configuration of the resumed run.
-    folder : str or Path
-        The run folder.
-    force : bool, optional
-        Return the differences instead of refusing.
-
-    Returns
-    -------
-    list of str
-        Every changed key with its value there and now (empty when nothing changed).
-
-    Raises
-    ------
-    ConfigError
-        Naming every key whose value differs from the folder's ``config.toml`` (unless
-        ``force``).
-    """
-    saved = Path(folder) / "config.toml"
-    if not saved.is_file():
-        return []
-    changed = [d for d in _differences(configuration.load(saved), cfg)
-               if not d.startswith("solver.iterations:")]
-    if changed and not force:
-        raise configuration.ConfigError(
-            f"cannot resume {Path(folder)}: it was run with another configuration ("
-            + "; ".join(changed) + "); resume with the same configuration, or start a new "
-            f"folder (or run without --resume to redo it){FORCE_HINT}")
-    return changed
-
-
-FORCE_HINT = "; --force (invflame run --resume --force) continues anyway and records it"
-
-
-def _content_hash(*arrays) -> str:
-    """SHA-256 of arrays' shapes, dtypes and bytes (hex)."""
-    digest = hashlib.sha256()
-    for array in arrays:
-        array = np.ascontiguousarray(array)
-        digest.update(f"{array.dtype.str}{array.shape}".encode())
-        digest.update(array.tobytes())
-    return digest.hexdigest()
-
-
-def run_fingerprint(cfg: dict, truth: Field | None, measurement: Measurement) -> dict:
-    """What defines a run beside its configuration, for :func:`check_fingerprint`.
-
-    Parameters
-    ----------
-    cfg : dict
-        Validated configuration (its solver's ``Options`` dataclass is described).
-    truth : Field or None
-        Ground truth on the reconstruction grid.
-    measurement : Measurement
-        Measured spectra and noise σ.
-
-    Returns
-    -------
-    dict
-        ``truth sha256`` and ``data sha256`` (content hashes of the truth's values and of the
-        measured spectra with σ), ``invflame version`` (the installed package's) and
-        ``solver options`` (the solver's options dataclass: each field with its type and
-        default).
-    """
-    options = solvers.get(cfg["solver"]["name"]).Options
-    return {
-        "truth sha256": None if truth is None else _content_hash(truth.values),
-        "data sha256": _content_hash(measurement.data, measurement.sigma),
-        "invflame version": importlib.metadata.version("invflame"),
-        "solver options": f"{options.__module__}.{options.__qualname__}("
-                          + ", ".join(f"{f.name}: {f.type} = {f.default!r}"
-                                      for f in dataclasses.fields(options)) + ")",
-    }
-
-
-def check_fingerprint(folder, fingerprint: dict, force: bool = False) -> list[str]:
-    """Refuse to resume a run folder whose data, truth or code changed since it was written.
-
-    Parameters
-    ----------
-    folder : str or Path
-        The run folder; its ``fingerprint.json`` is compared (a folder without one, written
-        before fingerprints were kept, has nothing to compare).
-    fingerprint : dict
-        :func:`run_fingerprint` of the resumed run.
-    force : bool, optional
-        Return the differences instead of refusing.
-
-    Returns
-    -------
-    list of str
-        Each changed entry with its value there and now.
-
-    Raises
-    ------
-    ConfigError
-        Naming each changed entry (unless ``force``).
-    """
-    saved = Path(folder) / FINGERPRINT
-    if not saved.is_file():
-        return []
-    changed = _differences(read_json(saved), fingerprint)
-    if changed and not force:
-        raise configuration.ConfigError(
-            f"cannot resume {Path(folder)}: what defines the run changed since it was written ("
-            + "; ".join(changed) + "); resume with the same truth, data and code, or start a "
-            f"new folder (or run without --resume to redo it){FORCE_HINT}")
-    return changed
-
-
-def chi2_per_value(simulated: np.ndarray, measurement: Measurement) -> float:
-    r"""Noise-weighted misfit per measured value, :math:`\chi^2/M` (≈ 1 at the noise level;
-    the plain mean squared misfit in (W/(m²·sr·cm⁻¹))² for noise-free data); masked values
-    (σ = inf) left out."""
-    residual = (simulated - measurement.data) / measurement.sigma
-    return float(np.sum(residual.astype(np.float64) ** 2) / measurement.n_measurements)
-
-
-def truth_scores(truth: np.ndarray, fields: np.ndarray, start: np.ndarray) -> dict:
-    """The summary's scores against a ground truth (fields ``(4, nx, ny, nz)``: T in K, mole
-    fractions): those of :func:`~invflame.experiments.metrics.field_scores` for the result and,
-    suffixed ``_initial``, for the start, and the result's PSNR in dB."""
-    scores, initial = field_scores(truth, fields), field_scores(truth, start)
-    return {**scores, "mse_initial": initial["mse"], "mse_flame_initial": initial["mse_flame"],
-            "hot_volume_ratio_initial": initial["hot_volume_ratio"],
-            "psnr_db": psnr(truth, fields)}
-
-
-def _t_range(scene: Scene) -> tuple[float, float]:
-    return float(scene.table.temperatures[0]), float(scene.table.temperatures[-1])
 
 
 def run_experiment(cfg: dict, out_dir, resume: bool = False, progress: bool = True,

@@ -11,7 +11,7 @@ import pytest
 
 from invflame.atomic_files import CorruptFileError
 from invflame.errors import GeometryError, OutputError
-from invflame.experiments import config, runner
+from invflame.experiments import config, runner, summaries
 from invflame.experiments.run_folder import INCOMPLETE, LOCK, RunLock
 from invflame.field import Field
 from invflame.geometry import CameraRig, VoxelGrid
@@ -77,7 +77,7 @@ def test_a_crashed_run_leaves_its_folder_marked_incomplete(tmp_path, monkeypatch
     def crash(*args, **kwargs):
         raise KeyboardInterrupt("killed while scoring")
 
-    monkeypatch.setattr(runner, "field_scores", crash)
+    monkeypatch.setattr(summaries, "field_scores", crash)
     with pytest.raises(KeyboardInterrupt):
         runner.run_experiment(cfg, tmp_path, progress=False)
     assert (tmp_path / INCOMPLETE).is_file() and not (tmp_path / "summary.json").exists()

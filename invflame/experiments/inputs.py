@@ -1,0 +1,66 @@
+"""What a run reads: the absorption table of its spectral window, the measurement file of
+``data.source`` and the ground truth of ``truth.source``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from invflame.experiments import config as configuration
+from invflame.field import Field
+from invflame.geometry import VoxelGrid
+from invflame.measurement_file import MeasurementFile, read_measurement
+from invflame.phantoms import make_phantom
+from invflame.spectroscopy.absorption_table import AbsorptionTable, default_linelists
+
+
+def absorption_table(cfg: dict, step: float | None = None) -> AbsorptionTable:
+    """The absorption table for the configuration's spectral window (cached on disk).
+
+    Parameters
+    ----------
+    cfg : dict
+        Validated configuration.
+    step : float, optional
+        Line-by-line step in cm⁻¹ (default ``spectrum.step``).
+    """
+    wavenumber = configuration.line_by_line_grid(cfg["spectrum"], step)
+    return AbsorptionTable.cached(default_linelists(wavenumber), wavenumber=wavenumber,
+                                  pressure=cfg["spectrum"]["pressure"])
+
+
+def read_data(cfg: dict) -> MeasurementFile | None:
+    """The measurement file of ``data.source`` (None when the data are simulated), checked
+    against the configuration's rig when it names one (``rig.file`` or ``rig.cameras``)."""
+    source = cfg["data"]["source"]
+    if not source:
+        return None
+    spec = configuration.rig_spec(cfg)
+    where = f"the rig file {cfg['rig']['file']}" if cfg["rig"]["file"] else "rig.cameras"
+    return read_measurement(source, rig=None if spec is None else spec.rig, rig_source=where)
+
+
+def load_truth(cfg: dict, grid: VoxelGrid | None = None) -> Field | None:
+    """The ground truth named by ``truth.source``: a phantom name or a field ``.npz`` file;
+    None for ``"none"`` (measured data without a truth).
+
+    Parameters
+    ----------
+    cfg : dict
+        Validated configuration.
+    grid : VoxelGrid, optional
+        Resample onto this grid; default: the truth's native grid (the pool fire's 60³ cells,
+        the synthetic plume's default 60³ grid, a file's own grid).
+    """
+    source = cfg["truth"]["source"]
+    if source == "none":
+        return None
+    if source in ("poolfire", "synthetic"):
+        field = make_phantom(source)
+    else:
+        path = Path(source)
+        if not path.is_file():
+            raise FileNotFoundError(
+                f"truth.source {source!r} is neither 'poolfire', 'synthetic' nor an existing file"
+            )
+        field = Field.load(path)
+    return field if grid is None else field.resample(grid)

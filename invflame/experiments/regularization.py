@@ -1,0 +1,68 @@
+"""The regularizer's weight in a run: λ scaled as configured (``regularizer.scaling``, see
+:mod:`invflame.experiments.runner`) or chosen from the data by the discrepancy principle."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import solvers
+from invflame.atomic_files import write_json
+from invflame.experiments.measurement import Measurement
+from invflame.scene import Scene
+
+
+def regularizer_weight(cfg: dict, scene: Scene, measurement: Measurement, lam: float) -> float:
+    """The solver's weight of the regularizer for a configured λ (*Weighting* in
+    :mod:`invflame.experiments.runner`):
+    λ·M under ``"chi2"`` scaling (:func:`solvers.problem_weight`), λ·R (pixels) under
+    ``"paper"``."""
+    if cfg["regularizer"]["scaling"] == "paper":
+        return lam * scene.n_rays
+    return solvers.problem_weight(lam, measurement.n_measurements)
+
+
+def choose_lambda(cfg: dict, representation, measurement: Measurement, x0, out: Path,
+                  log) -> solvers.ParameterChoice:
+    """λ by Morozov's discrepancy principle (:func:`solvers.discrepancy_principle`).
+
+    Every trial solves the configured problem from ``x0`` with the configured solver and
+    stopping rules; the choice and all trials go to ``lambda_choice.json`` and
+    ``l_curve.png`` in ``out``.
+
+    Parameters
+    ----------
+    cfg : dict
+        Validated configuration (``regularizer.lambda_range``, ``regularizer.tau``).
+    representation : VoxelRepresentation, NeuralFieldRepresentation, ...
+        Gives the problem for each λ.
+    measurement : Measurement
+        Data and noise σ.
+    x0 : ndarray
+        Starting parameters of every trial.
+    out : Path
+        Output folder.
+    log : callable
+        Receives one line per trial.
+    """
+    reg, solver = cfg["regularizer"], cfg["solver"]
+    m = measurement.n_measurements
+    per_epoch = representation.iterations_per_epoch
+
+    def solve_at(lam):
+        problem = representation.problem(measurement.data, regularizer=reg["kind"],
+                                         lam=solvers.problem_weight(lam, m), x0=x0,
+                                         sigma=measurement.sigma)
+        result = solvers.solve(problem, solver["name"],
+                               max_iter=solver["iterations"] * per_epoch, seed=cfg["seed"],
+                               **solver["options"])
+        final = problem.evaluate(result.x)
+        log(f"lambda {lam:.4g}: chi2/M {final.misfit / m:.4g}, Phi {final.regularizer:.4g} "
+            f"after {result.iterations} iterations ({result.stop_reason})")
+        return result.x, final.misfit, final.regularizer
+
+    low, high = reg["lambda_range"]
+    choice = solvers.discrepancy_principle(solve_at, m, high, low, tau=reg["tau"], refine=2)
+    write_json(out / "lambda_choice.json", choice.as_dict())
+    solvers.plot_l_curve(choice, out / "l_curve.png")
+    log(choice.message)
+    return choice

@@ -1,0 +1,146 @@
+"""Resuming a run folder safely: refuse one written under another configuration, truth,
+data or code (:func:`check_resumable`, :func:`check_fingerprint`), unless forced."""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import importlib.metadata
+from pathlib import Path
+
+import numpy as np
+
+import solvers
+from invflame.atomic_files import read_json
+from invflame.experiments import config as configuration
+from invflame.experiments.measurement import Measurement
+from invflame.field import Field
+
+FINGERPRINT = "fingerprint.json"
+FORCE_HINT = "; --force (invflame run --resume --force) continues anyway and records it"
+
+
+def _differences(a: dict, b: dict, where: str = "") -> list[str]:
+    keys = sorted(set(a) | set(b))
+    out = []
+    for key in keys:
+        path = f"{where}.{key}" if where else key
+        if isinstance(a.get(key), dict) and isinstance(b.get(key), dict) and key != "options":
+            out += _differences(a[key], b[key], path)
+        elif a.get(key) != b.get(key):
+            out.append(f"{path}: {a.get(key)!r} there, {b.get(key)!r} now")
+    return out
+
+
+def check_resumable(cfg: dict, folder, force: bool = False) -> list[str]:
+    """Refuse to resume a run folder written under another configuration (a larger iteration
+    limit is allowed: it continues the run).
+
+    Parameters
+    ----------
+    cfg : dict
+        Validated configuration of the resumed run.
+    folder : str or Path
+        The run folder.
+    force : bool, optional
+        Return the differences instead of refusing.
+
+    Returns
+    -------
+    list of str
+        Every changed key with its value there and now (empty when nothing changed).
+
+    Raises
+    ------
+    ConfigError
+        Naming every key whose value differs from the folder's ``config.toml`` (unless
+        ``force``).
+    """
+    saved = Path(folder) / "config.toml"
+    if not saved.is_file():
+        return []
+    changed = [d for d in _differences(configuration.load(saved), cfg)
+               if not d.startswith("solver.iterations:")]
+    if changed and not force:
+        raise configuration.ConfigError(
+            f"cannot resume {Path(folder)}: it was run with another configuration ("
+            + "; ".join(changed) + "); resume with the same configuration, or start a new "
+            f"folder (or run without --resume to redo it){FORCE_HINT}")
+    return changed
+
+
+
+def _content_hash(*arrays) -> str:
+    """SHA-256 of arrays' shapes, dtypes and bytes (hex)."""
+    digest = hashlib.sha256()
+    for array in arrays:
+        array = np.ascontiguousarray(array)
+        digest.update(f"{array.dtype.str}{array.shape}".encode())
+        digest.update(array.tobytes())
+    return digest.hexdigest()
+
+
+def run_fingerprint(cfg: dict, truth: Field | None, measurement: Measurement) -> dict:
+    """What defines a run beside its configuration, for :func:`check_fingerprint`.
+
+    Parameters
+    ----------
+    cfg : dict
+        Validated configuration (its solver's ``Options`` dataclass is described).
+    truth : Field or None
+        Ground truth on the reconstruction grid.
+    measurement : Measurement
+        Measured spectra and noise σ.
+
+    Returns
+    -------
+    dict
+        ``truth sha256`` and ``data sha256`` (content hashes of the truth's values and of the
+        measured spectra with σ), ``invflame version`` (the installed package's) and
+        ``solver options`` (the solver's options dataclass: each field with its type and
+        default).
+    """
+    options = solvers.get(cfg["solver"]["name"]).Options
+    return {
+        "truth sha256": None if truth is None else _content_hash(truth.values),
+        "data sha256": _content_hash(measurement.data, measurement.sigma),
+        "invflame version": importlib.metadata.version("invflame"),
+        "solver options": f"{options.__module__}.{options.__qualname__}("
+                          + ", ".join(f"{f.name}: {f.type} = {f.default!r}"
+                                      for f in dataclasses.fields(options)) + ")",
+    }
+
+
+def check_fingerprint(folder, fingerprint: dict, force: bool = False) -> list[str]:
+    """Refuse to resume a run folder whose data, truth or code changed since it was written.
+
+    Parameters
+    ----------
+    folder : str or Path
+        The run folder; its ``fingerprint.json`` is compared (a folder without one, written
+        before fingerprints were kept, has nothing to compare).
+    fingerprint : dict
+        :func:`run_fingerprint` of the resumed run.
+    force : bool, optional
+        Return the differences instead of refusing.
+
+    Returns
+    -------
+    list of str
+        Each changed entry with its value there and now.
+
+    Raises
+    ------
+    ConfigError
+        Naming each changed entry (unless ``force``).
+    """
+    saved = Path(folder) / FINGERPRINT
+    if not saved.is_file():
+        return []
+    changed = _differences(read_json(saved), fingerprint)
+    if changed and not force:
+        raise configuration.ConfigError(
+            f"cannot resume {Path(folder)}: what defines the run changed since it was written ("
+            + "; ".join(changed) + "); resume with the same truth, data and code, or start a "
+            f"new folder (or run without --resume to redo it){FORCE_HINT}")
+    return changed

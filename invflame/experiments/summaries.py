@@ -1,0 +1,60 @@
+"""What a run's summary says beside the solver's result: the protocol in words, the misfit per
+measured value and the scores against a ground truth."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from invflame.experiments.measurement import Measurement
+from invflame.experiments.metrics import field_scores, psnr
+
+
+def protocol(cfg: dict, measurement: Measurement) -> dict[str, str]:
+    """What made a result, in words: the start, the data, the noise and the weight λ."""
+    init, data, reg = cfg["init"], cfg["data"], cfg["regularizer"]
+    starts = {"band-tomography": "data-driven (band-integrated linear tomography + "
+                                 "Burke-Schumann state relation); knows nothing of the truth",
+              "ambient": "ambient air; knows nothing of the truth",
+              "noisy-truth": f"ground truth + {init['noise']:g} relative Gaussian noise (the "
+                             "paper's protocol: starts from the answer)"}
+    record = measurement.provenance
+    if data["source"]:
+        made = f"measured, read from {data['source']}"
+    elif data["inverse_crime"]:
+        made = "inverse crime: the reconstruction's own grid, sub-rays and line-by-line step"
+    else:
+        made = (f"truth on its {'x'.join(map(str, record['grid']))} grid, "
+                f"{record['rays_per_pixel']} sub-rays/pixel, line-by-line step "
+                f"{record['step_cm-1']:g} cm-1")
+    noise = cfg["noise"]
+    if not measurement.noisy:
+        said = "none (noise-free data)"
+    elif data["source"]:
+        sigma = measurement.sigma[np.isfinite(measurement.sigma)]
+        said = (f"from the file: sigma {sigma.min():.3g}-{sigma.max():.3g} W/(m2 sr cm-1); "
+                f"{measurement.data.size - measurement.n_measurements} masked values")
+    elif noise["kind"] == "snr":
+        said = f"Gaussian, peak SNR {noise['snr']:g}"
+    else:
+        said = (f"Gaussian, NESR {noise['nesr']} W/(m2 sr cm-1) (peak SNR "
+                f"{record['peak_snr']:.0f})")
+    return {"start": starts[init["kind"]], "data": made, "noise": said,
+            "lambda": f"{reg['lambda']} ({reg['scaling']} scaling)"}
+
+
+def chi2_per_value(simulated: np.ndarray, measurement: Measurement) -> float:
+    r"""Noise-weighted misfit per measured value, :math:`\chi^2/M` (≈ 1 at the noise level;
+    the plain mean squared misfit in (W/(m²·sr·cm⁻¹))² for noise-free data); masked values
+    (σ = inf) left out."""
+    residual = (simulated - measurement.data) / measurement.sigma
+    return float(np.sum(residual.astype(np.float64) ** 2) / measurement.n_measurements)
+
+
+def truth_scores(truth: np.ndarray, fields: np.ndarray, start: np.ndarray) -> dict:
+    """The summary's scores against a ground truth (fields ``(4, nx, ny, nz)``: T in K, mole
+    fractions): those of :func:`~invflame.experiments.metrics.field_scores` for the result and,
+    suffixed ``_initial``, for the start, and the result's PSNR in dB."""
+    scores, initial = field_scores(truth, fields), field_scores(truth, start)
+    return {**scores, "mse_initial": initial["mse"], "mse_flame_initial": initial["mse_flame"],
+            "hot_volume_ratio_initial": initial["hot_volume_ratio"],
+            "psnr_db": psnr(truth, fields)}
