@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from invflame.errors import InputDataError
 from solvers.atomic import CorruptFileError, read_npz, write_atomic
 
 __all__ = ["CorruptFileError", "read_json", "read_npz", "write_atomic", "write_csv",
@@ -60,3 +61,32 @@ def read_json(path):
     except (json.JSONDecodeError, UnicodeDecodeError) as err:
         raise CorruptFileError(f"{path} is damaged or incomplete (not valid JSON: {err}); delete "
                                "it and write it again") from err
+
+
+def read_netcdf(path, what: str):
+    """Load a whole NetCDF-4 file into memory as an :class:`xarray.Dataset`.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    what : str
+        What the file should be, for messages (e.g. "measurement file").
+
+    Raises
+    ------
+    FileNotFoundError
+        If there is no file at ``path``.
+    InputDataError
+        If the file cannot be read as NetCDF (the message names it and ``what``).
+    """
+    import xarray as xr
+
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{what} not found: {path}")
+    try:
+        with xr.open_dataset(path, engine="netcdf4") as opened:
+            return opened.load()
+    except (OSError, ValueError) as err:
+        raise InputDataError(f"{path}: not a NetCDF {what} ({err})") from err

@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from invflame.atomic_files import write_atomic
+from invflame.atomic_files import read_netcdf, write_atomic
 from invflame.errors import InputDataError
 from operators.planck import planck
 
@@ -170,13 +170,7 @@ def read_background(path) -> MeasuredBackground:
         and the variable.
     """
     path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"background file not found: {path}")
-    try:
-        with xr.open_dataset(path, engine="netcdf4") as opened:
-            dataset = opened.load()
-    except (OSError, ValueError) as err:
-        raise InputDataError(f"{path}: not a NetCDF background file ({err})") from err
+    dataset = read_netcdf(path, "background file")
     try:
         if "background" in dataset.variables:
             variable = dataset["background"]

@@ -50,7 +50,7 @@ import numpy as np
 import xarray as xr
 
 from invflame import __version__
-from invflame.atomic_files import write_atomic
+from invflame.atomic_files import read_netcdf, write_atomic
 from invflame.errors import InputDataError
 from invflame.experiments.measurement import Measurement
 from invflame.geometry import CameraRig
@@ -258,13 +258,7 @@ def read_measurement(path, rig: CameraRig | None = None,
         message names the file and the variable.
     """
     path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"measurement file not found: {path}")
-    try:
-        with xr.open_dataset(path, engine="netcdf4") as opened:
-            dataset = opened.load()
-    except (OSError, ValueError) as err:
-        raise InputDataError(f"{path}: not a NetCDF measurement file ({err})") from err
+    dataset = read_netcdf(path, "measurement file")
     read = _Reader(dataset, path)
     radiance = read.variable("radiance", DIMS, RADIANCE_UNITS)
     wavenumber = read.variable("wavenumber", ("wavenumber",), "cm-1").astype(np.float64)

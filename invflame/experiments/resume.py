@@ -61,12 +61,8 @@ def check_resumable(cfg: dict, folder, force: bool = False) -> list[str]:
         return []
     changed = [d for d in _differences(configuration.load(saved), cfg)
                if not d.startswith("solver.iterations:")]
-    if changed and not force:
-        raise configuration.ConfigError(
-            f"cannot resume {Path(folder)}: it was run with another configuration ("
-            + "; ".join(changed) + "); resume with the same configuration, or start a new "
-            f"folder (or run without --resume to redo it){FORCE_HINT}")
-    return changed
+    return _refuse_unless_forced(folder, changed, force, "it was run with another configuration",
+                                 "the same configuration")
 
 
 
@@ -138,9 +134,16 @@ def check_fingerprint(folder, fingerprint: dict, force: bool = False) -> list[st
     if not saved.is_file():
         return []
     changed = _differences(read_json(saved), fingerprint)
+    return _refuse_unless_forced(folder, changed, force,
+                                 "what defines the run changed since it was written",
+                                 "the same truth, data and code")
+
+
+def _refuse_unless_forced(folder, changed: list[str], force: bool, why: str,
+                          same: str) -> list[str]:
+    """Raise a :class:`ConfigError` naming ``changed`` (unless empty or ``force``); return it."""
     if changed and not force:
         raise configuration.ConfigError(
-            f"cannot resume {Path(folder)}: what defines the run changed since it was written ("
-            + "; ".join(changed) + "); resume with the same truth, data and code, or start a "
-            f"new folder (or run without --resume to redo it){FORCE_HINT}")
+            f"cannot resume {Path(folder)}: {why} (" + "; ".join(changed) + f"); resume with "
+            f"{same}, or start a new folder (or run without --resume to redo it){FORCE_HINT}")
     return changed
