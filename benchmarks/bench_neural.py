@@ -1,31 +1,42 @@
-"""Epoch time and parameter memory of the neural representations at the paper's size.
+"""Epoch time and memory of the neural field against the voxel grid, in one process.
 
-Paper configuration: 60³ grid (regularizer sampling, voxel centres), 4 cameras of 32×32
-pixels (4096 rays), 650–725 cm⁻¹ at 0.04 cm⁻¹ (1876 wavenumbers), 8 cm⁻¹ FTIR resolution,
-Tikhonov regularizer, float32. One epoch is one pass over all rays, forward and backward:
+Paper configuration (default): 60³ grid, 4 cameras of 32×32 pixels (4096 measured rays,
+``--rays-per-pixel`` sub-rays each, 9 by default as in :meth:`Scene.paper`), 650–725 cm⁻¹ at
+0.04 cm⁻¹ (1876 wavenumbers), 8 cm⁻¹ FTIR resolution, Tikhonov regularizer, float32. One
+epoch is one pass over all rays, forward and backward:
 
-* neural field: ``n_rays / batch_rays`` stochastic iterations (coarse and fine renderings of
-  a ray batch, regularizer on a batch of voxel centres, gradient by backpropagation through
-  the networks and the emission kernel's VJP);
-* neural centres: one evaluation of the full objective and its gradient (network at all
-  voxel centres, voxel forward map, its VJP, the network's VJP).
+* voxel grid: one evaluation of the full objective and its gradient (voxel forward map and
+  its VJP over all rays, regularizer over all voxels);
+* neural field: ``ceil(n_rays / batch_rays)`` stochastic iterations (coarse and fine
+  renderings of a ray batch in chunks of ``chunk_rays`` pixels, regularizer on a batch of
+  voxel centres, gradient by backpropagation through the networks and the emission kernel's
+  VJP);
+* neural centres (``--centres``): one evaluation of the full objective and its gradient
+  (network at all voxel centres, voxel forward map, its VJP, the network's VJP).
 
-Compilation runs first (one warm-up iteration) and is not timed. The paper reports
-479–493 ms per epoch and 65–66 MB on a GPU for its neural field (Tricard, Chen & Deng 2026,
-Table 1). Here "parameter memory" is the size of the weights; the peak resident memory of
-the process is printed for context (CPU).
+Compilation runs first (one warm-up iteration or evaluation) and is not timed. Times are wall
+clock and CPU time of the process (all threads; steadier than wall time on a shared machine);
+compare them only as ratios within one run. The breakdown times the stages of the neural
+field's first batch one after the other (sampling with the coarse network, fine network,
+emission kernel on both sample sets, kernel VJP, networks' backward, regularizer). Peak
+resident memory is read after the neural-field epoch, before the voxel epoch runs. The paper
+reports 479–493 ms per epoch and 65–66 MB on a GPU for its neural field (Tricard, Chen & Deng
+2026, Table 1).
 
-    python benchmarks/bench_neural.py [--batches 2] [--n-coarse 64] [--n-fine 64]
+    python benchmarks/bench_neural.py [--rays-per-pixel 9] [--batches N] [--centres]
 """
 
 import argparse
 import resource
 import time
+from functools import partial
 
 import numpy as np
+import torch
 
 from invflame.phantoms import synthetic_plume
 from invflame.representations.neural import NeuralCentresRepresentation, NeuralFieldRepresentation
+from invflame.representations.voxel import VoxelRepresentation
 from invflame.scene import Scene
 
 PAPER_MS = "479–493 ms"
@@ -33,73 +44,160 @@ PAPER_MB = "65–66 MB"
 
 
 def peak_rss_mb() -> float:
+    """Peak resident memory of this process so far, in MB."""
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
-def bench_neural_field(scene, data, args):
-    rep = NeuralFieldRepresentation(scene, n_coarse=args.n_coarse, n_fine=args.n_fine,
-                                    batch_rays=args.batch_rays,
-                                    batch_centres=args.batch_centres)
-    theta = rep.initial_parameters()
-    problem = rep.problem(data, "tikhonov", x0=theta)
-    n_batches = -(-scene.n_rays // rep.renderer.batch_rays)
-    timed = n_batches if args.batches is None else min(args.batches, n_batches)
-    start = time.perf_counter()
-    problem.value_and_grad(theta, 0, np.random.default_rng(0))
-    compile_s = time.perf_counter() - start
-    start = time.perf_counter()
-    for k in range(timed):
-        problem.value_and_grad(theta, k + 1, np.random.default_rng(k + 1))
-    per_batch = (time.perf_counter() - start) / timed
-    print(f"neural field: {rep.n_parameters} weights (coarse + fine), samples per ray "
-          f"{args.n_coarse} coarse + {args.n_fine} fine, {rep.renderer.batch_rays} rays per "
-          f"batch, {rep.batch_centres} centres per batch")
-    print(f"  epoch ({n_batches} batches, {timed} timed): "
-          f"{1e3 * per_batch * n_batches:.0f} ms   [paper, GPU: {PAPER_MS}]   "
-          f"(first batch with compilation {compile_s:.1f} s)")
-    print(f"  parameter memory: {rep.parameter_bytes(theta) / 1e6:.3f} MB   "
-          f"[paper, GPU memory: {PAPER_MB}]")
+class Clock:
+    """Wall and CPU seconds (s) of code blocks, summed per label."""
+
+    def __init__(self):
+        self.seconds = {}
+
+    def __call__(self, label, fn, *args):
+        """Run ``fn(*args)`` and add its wall and CPU time to ``label``; return its value."""
+        wall, cpu = time.perf_counter(), time.process_time()
+        out = fn(*args)
+        spent = np.array([time.perf_counter() - wall, time.process_time() - cpu])
+        self.seconds[label] = self.seconds.get(label, 0.0) + spent
+        return out
 
 
-def bench_neural_centres(scene, data, args):
+def timed(fn, repeats: int) -> np.ndarray:
+    """Best wall and best CPU seconds of ``repeats`` calls of ``fn`` (after one untimed)."""
+    fn()
+    clock, best = Clock(), np.full(2, np.inf)
+    for _ in range(repeats):
+        clock.seconds.clear()
+        clock("run", fn)
+        best = np.minimum(best, clock.seconds["run"])
+    return best
+
+
+def voxel_epoch(scene, data, truth, repeats: int) -> np.ndarray:
+    """Wall and CPU seconds of the voxel objective and gradient over all rays."""
+    rep = VoxelRepresentation(scene.grid, scene.operator)
+    problem = rep.problem(data, "tikhonov", x0=rep.initial_parameters(truth))
+    return timed(lambda: problem.evaluate(problem.x0).grad, repeats)
+
+
+def neural_epoch(rep, data, n_batches: int) -> np.ndarray:
+    """Wall and CPU seconds of an epoch of stochastic iterations (``n_batches`` of them timed,
+    scaled to the epoch)."""
+    problem = rep.problem(data, "tikhonov", x0=rep.initial_parameters())
+    step = problem.value_and_grad
+    theta = problem.x0
+    step(theta, 0, np.random.default_rng(0))
+    clock = Clock()
+    for k in range(n_batches):
+        clock("batch", step, theta, k + 1, np.random.default_rng(k + 1))
+    return clock.seconds["batch"] * rep.iterations_per_epoch / n_batches
+
+
+def neural_stages(rep, data) -> dict:
+    """Wall and CPU seconds of the stages of one training batch, run one after the other."""
+    renderer, clock = rep.renderer, Clock()
+    objective = rep.problem(data, "tikhonov").value_and_grad
+    theta = torch.tensor(rep.initial_parameters(), requires_grad=True)
+    theta_c, theta_f = rep.split(theta)
+    pixels = torch.as_tensor(rep.epoch_batches(0)[0])
+    offsets, quantiles = renderer.random_draws(np.random.default_rng(0))
+    for pixel_part, ray_part in renderer.chunks(pixels.numel()):
+        rays = renderer.sub_rays(pixels[pixel_part])
+        t_coarse, coarse, coarse_lengths, t_fine, fine_lengths = clock(
+            "sampling (coarse network, importance)", renderer.samples, rays,
+            partial(rep.coarse.evaluate, theta_c), offsets[ray_part], quantiles[ray_part])
+        points = renderer.points(rays, t_fine)
+        fine = clock("fine network", rep.fine.evaluate, theta_f, points)
+        fields = [renderer.kernel_fields(coarse, renderer.points(rays, t_coarse)),
+                  renderer.kernel_fields(fine, points)]
+        leaves = [f.detach().requires_grad_() for f in fields]
+        spectra = clock("emission kernel (coarse + fine)", renderer.measure, rays,
+                        (leaves[0], coarse_lengths), (leaves[1], fine_lengths))
+        target = objective.target[pixels[pixel_part]]
+        misfit = sum(torch.sum((s * objective.weights[pixels[pixel_part]] - target) ** 2)
+                     for s in spectra)
+        cotangents = clock("kernel VJP", torch.autograd.grad, misfit, leaves)
+        clock("networks' backward", torch.autograd.backward, fields, cotangents)
+    centres = torch.as_tensor(np.random.default_rng(0).choice(
+        objective.centre_regularizer.n_centres, rep.batch_centres, replace=False))
+    u = partial(rep.fine.evaluate, theta_f, normalized=True)
+    clock("regularizer (forward, backward)",
+          lambda: objective.centre_regularizer(u, centres).backward())
+    return clock.seconds
+
+
+def centres_epoch(scene, data, repeats: int) -> np.ndarray:
+    """Wall and CPU seconds of the neural-centres objective and gradient over all rays."""
     rep = NeuralCentresRepresentation(scene)
-    theta = rep.initial_parameters()
-    problem = rep.problem(data, "tikhonov", x0=theta)
-    start = time.perf_counter()
-    _ = problem.evaluate(theta).grad
-    compile_s = time.perf_counter() - start
-    times = []
-    for _ in range(args.repeats):
-        start = time.perf_counter()
-        _ = problem.evaluate(theta).grad
-        times.append(time.perf_counter() - start)
-    print(f"neural centres: {rep.n_parameters} weights, network at {rep.grid.n_voxels} voxel "
-          f"centres, voxel forward map")
-    print(f"  epoch (full objective + gradient, best of {args.repeats}): "
-          f"{1e3 * min(times):.0f} ms   (first with compilation {compile_s:.1f} s)")
-    print(f"  parameter memory: {rep.parameter_bytes(theta) / 1e6:.3f} MB")
+    problem = rep.problem(data, "tikhonov", x0=rep.initial_parameters())
+    return timed(lambda: problem.evaluate(problem.x0).grad, repeats)
+
+
+def seconds(t) -> str:
+    return f"{t[0]:7.2f} s wall {t[1]:7.2f} s CPU"
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--rays-per-pixel", type=int, default=9, help="sub-rays per pixel")
     parser.add_argument("--n-coarse", type=int, default=64, help="coarse samples per ray")
     parser.add_argument("--n-fine", type=int, default=64, help="importance samples per ray")
-    parser.add_argument("--batch-rays", type=int, default=1024, help="rays per iteration")
+    parser.add_argument("--batch-rays", type=int, default=1024, help="pixels per iteration")
+    parser.add_argument("--chunk-rays", type=int, default=None,
+                        help="pixels per rendering call (default: the renderer's)")
     parser.add_argument("--batch-centres", type=int, default=4096,
                         help="voxel centres per iteration for the regularizer")
     parser.add_argument("--batches", type=int, default=None,
                         help="time only this many batches and scale to an epoch "
                              "(default: the whole epoch)")
     parser.add_argument("--repeats", type=int, default=1,
-                        help="timed epochs of the neural-centres representation")
+                        help="timed voxel (and neural-centres) epochs, best taken")
+    parser.add_argument("--centres", action="store_true",
+                        help="also time the neural-centres representation")
     args = parser.parse_args()
 
-    scene = Scene.paper()
-    data = scene.simulate(synthetic_plume(scene.grid).values)
-    print(f"scene: {scene.grid.shape} grid, {scene.n_rays} rays, {scene.wavenumber.size} "
-          f"wavenumbers -> {scene.out_wavenumber.size} outputs, {scene.dtype}")
-    bench_neural_field(scene, data, args)
-    bench_neural_centres(scene, data, args)
+    scene = Scene.paper(rays_per_pixel=args.rays_per_pixel)
+    truth = synthetic_plume(scene.grid).values
+    data = scene.simulate(truth)
+    print(f"scene: {scene.grid.shape} grid, {scene.n_rays} rays x {scene.rays_per_pixel} "
+          f"sub-rays, {scene.wavenumber.size} wavenumbers -> {scene.out_wavenumber.size} "
+          f"outputs, {scene.dtype}; {torch.get_num_threads()} torch threads")
+    rep = NeuralFieldRepresentation(scene, n_coarse=args.n_coarse, n_fine=args.n_fine,
+                                    batch_rays=args.batch_rays, chunk_rays=args.chunk_rays,
+                                    batch_centres=args.batch_centres)
+    renderer = rep.renderer
+    n_batches = rep.iterations_per_epoch
+    timed_batches = n_batches if args.batches is None else min(args.batches, n_batches)
+    neural = neural_epoch(rep, data, timed_batches)
+    neural_peak = peak_rss_mb()
+    stages = neural_stages(rep, data)
+    voxel = voxel_epoch(scene, data, truth, args.repeats)
+    segments = int(np.count_nonzero(scene.segments.length))
+    samples = scene.segments.n_rays * (2 * renderer.n_coarse + renderer.n_fine)
+    print(f"voxel grid: {segments / scene.segments.n_rays:.1f} segments per sub-ray")
+    print(f"  epoch (objective + gradient, best of {args.repeats}): {seconds(voxel)}")
+    print(f"neural field: {rep.n_parameters} weights (coarse + fine), "
+          f"{renderer.n_coarse} coarse + {renderer.n_fine} fine samples per sub-ray "
+          f"({renderer.n_coarse} + {renderer.n_coarse + renderer.n_fine} kernel segments), "
+          f"{renderer.batch_rays} pixels per batch in calls of {renderer.chunk_rays}, "
+          f"{rep.batch_centres} centres per batch")
+    print(f"  epoch ({n_batches} batches, {timed_batches} timed): {seconds(neural)}   "
+          f"[paper, GPU: {PAPER_MS}]")
+    print(f"  neural / voxel epoch: {neural[0] / voxel[0]:.2f} wall, "
+          f"{neural[1] / voxel[1]:.2f} CPU; kernel segments per epoch "
+          f"{samples / segments:.2f}x the voxel map's")
+    print(f"  peak resident memory after the neural epoch: {neural_peak:.0f} MB")
+    print(f"  parameter memory: {rep.parameter_bytes(rep.initial_parameters()) / 1e6:.3f} MB"
+          f"   [paper, GPU memory: {PAPER_MB}]")
+    total = sum(stages.values())
+    print(f"  stages of one batch (in sequence, {seconds(total)}):")
+    for label, t in stages.items():
+        print(f"    {label:<40} {seconds(t)}   {100 * t[1] / total[1]:4.0f} % CPU")
+    if args.centres:
+        centres = centres_epoch(scene, data, args.repeats)
+        print(f"neural centres: epoch (objective + gradient, best of {args.repeats}): "
+              f"{seconds(centres)}")
     print(f"peak resident memory of this process: {peak_rss_mb():.0f} MB")
 
 

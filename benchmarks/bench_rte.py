@@ -1,7 +1,8 @@
 """Time the emission RTE in the study's configuration against a bare exponential.
 
-Run: ``python benchmarks/bench_rte.py [--cells 60] [--pixels 32] [--repeats 5]
-[--batch-rays N | --memory-budget BYTES] [--phantom synthetic]``.
+Run: ``python benchmarks/bench_rte.py [--cells 60] [--pixels 32] [--rays-per-pixel 9]
+[--repeats 5] [--batch-rays N | --memory-budget BYTES] [--phantom synthetic]
+[--clock cpu|wall] [--stages]``.
 
 Builds :meth:`invflame.scene.Scene.paper` (60³ grid over a 1 m cube, four 32×32 cameras,
 650–725 cm⁻¹ at 0.04 cm⁻¹ from :meth:`AbsorptionTable.default`, float32) and times, best of
@@ -9,42 +10,151 @@ the repeats:
 
 * forward: the fused voxel forward map (sampling, emission RTE, instrument lineshape);
 * forward+VJP: value and gradient of ``0.5 ||H(f) - g||²``, one epoch of gradient descent;
+* JVP: one product of the Jacobian from ``Scene.operator.linearize`` (the forward-mode
+  sweep, value and tangent together), as Gauss–Newton and PDHG use it;
+* kernel forward, VJP, JVP: the emission kernel alone on the scene's segment fields
+  (:func:`~operators.rte_kernel.emission_radiance`, its pullback of a given cotangent with the
+  value, :func:`~operators.rte_kernel.emission_radiance_jvp`);
 * exp-only: a jitted ``exp`` over as many float32 elements, in the same ray batches and
-  the same number of segment steps per batch as the kernel.
+  the same number of segment steps per batch as the kernel;
+* with ``--stages``, the stages of the kernel, each a jitted loop over the same batches and
+  segment steps on the scene's segment fields: the cross-section spline (gathered table
+  rows, Horner sums, the optical depth), the Planck spline, the transmission (``exp`` and
+  absorptance), the sums over wavenumber of the reverse sweep, the whole forward and reverse
+  sweeps, and the gathers and scatters that put rays into batches and back (with their VJP).
 
 "elements" is the number of real segments times the number of wavenumbers; the kernel also
 sweeps the padding of each batch (rays sorted by segment count), reported as "swept".
-Peak memory is the process's peak resident set size, and XLA's temporary buffers of the
-compiled forward+VJP.
+Peak memory is the process's peak resident set size (``resource.getrusage``), and XLA's
+temporary buffers of the compiled forward+VJP.
 """
 
 import argparse
 import resource
+from functools import partial
 
 import jax
 import jax.numpy as jnp
-from timing import best_time
+import numpy as np
+from timing import CLOCKS, best_time
 
 from invflame.phantoms.registry import make_phantom
 from invflame.scene import Scene
-from operators.rte_batches import ray_order
+from operators import rte_kernel
+from operators.rte_batches import batched_inputs, from_batches, ray_order, spectra_batches
+from operators.rte_kernel import emission_radiance, emission_radiance_jvp
+
+
+def resident_mib() -> float:
+    """Peak resident set size of this process so far, in MiB."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**10  # KiB -> MiB
+
+
+def segment_loop(body, n_segments, init):
+    """Jitted ``lax.map`` over batches of a ``fori_loop`` over each batch's segments.
+
+    ``body(k, acc, batch) -> acc``; the returned function takes ``(n_segments, batches)``.
+    """
+    def batch(args):
+        n, inputs = args
+        return jax.lax.fori_loop(0, n, lambda k, acc: body(k, acc, inputs), init)
+
+    return jax.jit(lambda n, batches: jax.lax.map(batch, (n, batches)))
 
 
 def exp_only(n_segments, batch_rays: int, n_eta: int):
     """Jitted loop: per batch, ``n_segments[b]`` steps of ``exp`` over (batch_rays, n_eta)."""
     x = jnp.linspace(0.0, 1.0, batch_rays * n_eta, dtype=jnp.float32).reshape(batch_rays, n_eta)
+    loop = segment_loop(lambda k, acc, _: acc + jnp.exp(-x * k.astype(jnp.float32)),
+                        n_segments, jnp.zeros_like(x))
+    return lambda: loop(n_segments, None)
 
-    def batch(n):
-        step = lambda k, acc: acc + jnp.exp(-x * k.astype(jnp.float32))  # noqa: E731
-        return jax.lax.fori_loop(0, n, step, jnp.zeros_like(x))
 
-    return jax.jit(lambda n: jax.lax.map(batch, n))
+def stages(scene: Scene, fields, repeats: int, clock: str) -> dict:
+    """Best times in s of the kernel's stages on the scene's segment fields (module notes)."""
+    tables, batch_rays = scene.tables, scene.batch_rays
+    lengths = jnp.asarray(scene.segments.length, tables.dtype)
+    segment_fields = jnp.asarray(scene.sampling(np.asarray(fields)), tables.dtype)
+    order, n_segments = ray_order(lengths, batch_rays)
+    temperature, fractions, length = batched_inputs(tables, segment_fields, lengths, order,
+                                                    batch_rays)
+    index = rte_kernel._interval(tables, temperature)
+    amount, offset, temp = jax.vmap(partial(rte_kernel._segment_weights, tables))(
+        index, temperature, fractions, length)
+    batches = (index, amount, offset, temp)
+    radiance = rte_kernel.emission_radiance(tables, segment_fields, lengths, batch_rays)
+    cotangent = jnp.ones_like(radiance)
+    zeros = jnp.zeros((batch_rays, tables.n_eta), tables.dtype)
+
+    def spectra(k, b):
+        return rte_kernel._spectra(tables, b[0][k], b[1][k], b[2][k], b[3][k])
+
+    x = jnp.linspace(0.0, 1.0, zeros.size, dtype=tables.dtype).reshape(zeros.shape)
+    n_sums = amount.shape[-1] + 1  # per row of tau, and the offset's (Planck table)
+
+    def reduce(k, acc, _):
+        sums = [jnp.sum(acc * (x + j), axis=-1) for j in range(n_sums)]
+        return acc + k * jnp.stack(sums, axis=-1).sum(axis=-1, keepdims=True)
+
+    loops = {
+        "spline tau": lambda k, acc, b: acc + spectra(k, b)[0],
+        "Planck B": lambda k, acc, b: acc + spectra(k, b)[3],
+        "transmission": lambda k, acc, b: acc + sum(rte_kernel._transmission(x * k)),
+        "reductions": reduce,
+    }
+    times = {}
+    for name, body in loops.items():
+        times[name] = best_time(partial(segment_loop(body, n_segments, zeros), n_segments,
+                                        batches), repeats, clock)
+
+    sweep = jax.jit(lambda n, b: jax.lax.map(
+        lambda a: rte_kernel._sweep(tables, *a[1], a[0], None), (n, b)))
+    times["forward sweep"] = best_time(lambda: sweep(n_segments, batches), repeats, clock)
+    spectra_in = (spectra_batches(radiance, order, batch_rays),
+                  spectra_batches(cotangent, order, batch_rays))
+    reverse = jax.jit(lambda n, b, s: jax.lax.map(
+        lambda a: rte_kernel._sweep_vjp(tables, *a[1], a[0], *a[2]), (n, b, s)))
+    times["reverse sweep"] = best_time(lambda: reverse(n_segments, batches, spectra_in),
+                                       repeats, clock)
+
+    def batching(f, s, spectrum):
+        out, to_inputs = jax.vjp(
+            lambda f, s: batched_inputs(tables, f, s, order, batch_rays), f, s)
+        both = (spectra_batches(spectrum, order, batch_rays),
+                spectra_batches(spectrum, order, batch_rays))
+        return to_inputs(out), from_batches(both[0] + both[1], order)
+
+    times["batching"] = best_time(lambda: jax.jit(batching)(segment_fields, lengths, radiance),
+                                  repeats, clock)
+    return times
+
+
+def kernel_calls(scene: Scene, fields, direction) -> dict:
+    """The kernel alone on the scene's segment fields: forward, forward+VJP, forward+JVP."""
+    tables, batch_rays = scene.tables, scene.batch_rays
+    lengths = jnp.asarray(scene.segments.length, tables.dtype)
+    segment_fields = jnp.asarray(scene.sampling(np.asarray(fields)), tables.dtype)
+    tangent = jnp.asarray(scene.sampling(direction.reshape(fields.shape)), tables.dtype)
+    cotangent = jnp.ones((lengths.shape[0], tables.n_eta), tables.dtype)
+
+    def radiance(f):
+        return emission_radiance(tables, f, lengths, batch_rays)
+
+    pullback = jax.jit(lambda f: jax.vjp(radiance, f)[1](cotangent))
+    return {
+        "kernel forward": lambda: radiance(segment_fields),
+        "kernel VJP": lambda: pullback(segment_fields),
+        "kernel JVP": lambda: emission_radiance_jvp(tables, segment_fields, lengths, tangent,
+                                                    jnp.zeros_like(lengths), batch_rays),
+    }
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cells", type=int, default=60, help="voxels per grid axis")
     parser.add_argument("--pixels", type=int, default=32, help="pixels per image side")
+    parser.add_argument("--rays-per-pixel", type=int, default=9,
+                        help="sub-rays per pixel (Scene.paper's default: 9)")
     parser.add_argument("--repeats", type=int, default=5, help="timed repetitions (best kept)")
     parser.add_argument("--batch-rays", type=int, default=None,
                         help="rays per batch (default: from the memory budget)")
@@ -52,11 +162,17 @@ def main() -> None:
                         help="bytes for one ray batch (default: per JAX backend)")
     parser.add_argument("--phantom", default="synthetic",
                         help="ground-truth field by name (invflame.phantoms.registry)")
+    parser.add_argument("--clock", choices=sorted(CLOCKS), default="cpu",
+                        help="wall time, or the process's CPU time (default: on a shared "
+                        "machine it leaves out waiting for a core)")
+    parser.add_argument("--stages", action="store_true",
+                        help="also time the kernel's stages (module notes)")
     args = parser.parse_args()
 
-    scene = Scene.paper(args.cells, args.pixels, memory_budget=args.memory_budget,
-                        batch_rays=args.batch_rays)
+    scene = Scene.paper(args.cells, args.pixels, rays_per_pixel=args.rays_per_pixel,
+                        memory_budget=args.memory_budget, batch_rays=args.batch_rays)
     fields = jnp.asarray(make_phantom(args.phantom, grid=scene.grid).values, jnp.float32)
+    built = resident_mib()
     data = scene.forward(fields) * 1.01
 
     def loss(f):
@@ -67,23 +183,40 @@ def main() -> None:
     elements = seg.n_segments * n_eta
     _, n_steps = ray_order(jnp.asarray(seg.length), scene.batch_rays)
     swept = int(n_steps.sum()) * scene.batch_rays * n_eta
-    t_exp = best_time(lambda: exp_only(n_steps, scene.batch_rays, n_eta)(n_steps), args.repeats)
-    t_fwd = best_time(lambda: scene.forward(fields), args.repeats)
-    t_grad = best_time(lambda: gradient(fields), args.repeats)
-    temp = gradient.lower(fields).compile().memory_analysis().temp_size_in_bytes
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**10  # KiB -> MiB
+    jacobian = scene.operator.linearize(np.asarray(fields))
+    direction = np.random.default_rng(0).standard_normal(fields.shape).astype(np.float32)
+    direction[0] *= 30.0  # kelvins for T, percent-level for mole fractions
+    direction[1:] *= 0.01
+    direction = direction.ravel()
 
-    print(f"backend {jax.default_backend()}, {jax.device_count()} device(s)")
-    print(f"grid {scene.grid.shape}, {scene.n_rays} rays, {seg.n_segments} segments "
-          f"(max {seg.max_segments}/ray), {n_eta} wavenumbers, "
+    timed = {
+        "exp-only": exp_only(n_steps, scene.batch_rays, n_eta),
+        "forward": lambda: scene.forward(fields),
+        "forward+VJP": lambda: gradient(fields),
+        "JVP": lambda: jacobian.matvec(direction),
+        **kernel_calls(scene, fields, direction),
+    }
+    times = {name: best_time(fn, args.repeats, args.clock) for name, fn in timed.items()}
+    if args.stages:
+        times.update({f"  {name}": t
+                      for name, t in stages(scene, fields, args.repeats, args.clock).items()})
+    temp = gradient.lower(fields).compile().memory_analysis().temp_size_in_bytes
+    peak = resident_mib()
+
+    print(f"backend {jax.default_backend()}, {jax.device_count()} device(s), {args.clock} "
+          f"time, best of {args.repeats}")
+    print(f"grid {scene.grid.shape}, {scene.n_rays} pixels x {args.rays_per_pixel} rays, "
+          f"{seg.n_segments} segments (max {seg.max_segments}/ray), {n_eta} wavenumbers, "
           f"{len(scene.tables.species)} absorbing species, {scene.tables.nodes.size} T nodes")
     print(f"batch {scene.batch_rays} rays; elements {elements:.4g} (segments x n_eta), "
           f"swept {swept:.4g} ({swept / elements - 1:+.1%} padding)")
-    for name, t in (("exp-only", t_exp), ("forward", t_fwd), ("forward+VJP", t_grad)):
-        print(f"{name:>12}: {1e3 * t:8.1f} ms  {1e9 * t / elements:6.2f} ns/element  "
-              f"{t / t_exp:5.1f} x exp-only")
-    print(f"peak memory: {peak:.0f} MiB resident; XLA temporaries of forward+VJP "
-          f"{temp / 2**20:.0f} MiB")
+    for name, t in times.items():
+        print(f"{name:>18}: {1e3 * t:8.1f} ms  {1e9 * t / elements:6.2f} ns/element  "
+              f"{t / times['exp-only']:5.2f} x exp-only")
+    print(f"JVP / forward: {times['JVP'] / times['forward']:.2f} (scene), "
+          f"{times['kernel JVP'] / times['kernel forward']:.2f} (kernel)")
+    print(f"peak memory: {peak:.0f} MiB resident ({built:.0f} MiB once the scene was built); "
+          f"XLA temporaries of forward+VJP {temp / 2**20:.0f} MiB")
 
 
 if __name__ == "__main__":

@@ -1,13 +1,14 @@
 """Sweep the regularizer weight λ of one honest-protocol method and print what each rule picks.
 
 Usage: python benchmarks/lambda_sweep.py [--truth synthetic] [--method VG/TV]
-       [--lambdas 3 10 30 100] [--out results/lambda_sweep]
+       [--lambdas 3 10 30 100] [--model-error 6] [--out results/lambda_sweep]
 
 Runs the method of ``invflame study --preset quick`` (same data, start, solver and stopping
 rule; one measurement and one start shared by all λ) once per λ, then prints per λ the
 noise-weighted misfit χ²/M, the regularizer Φ, the normalized MSE of T over the domain and the
-flame and the hot-volume ratio, and which λ the discrepancy principle (τ = 1) and the L-curve
-pick from those same points, beside the best one against the truth. Choose λ on one truth and
+flame and the hot-volume ratio, and which λ the discrepancy principle (τ = 1, and with
+``--model-error`` τ = 1 + the model error of prior flames) and the L-curve pick from those same
+points, beside the best one against the truth. Choose λ on one truth and
 report on another.
 """
 
@@ -19,6 +20,7 @@ from pathlib import Path
 
 import solvers
 from invflame.experiments import reproduce, runner
+from invflame.experiments.model_error import estimate_model_error
 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(prog="lambda_sweep")
@@ -26,6 +28,9 @@ if __name__ == "__main__":
     parser.add_argument("--method", default="VG/TV", choices=list(reproduce.METHODS))
     parser.add_argument("--lambdas", type=float, nargs="+", default=[3.0, 10.0, 30.0, 100.0])
     parser.add_argument("--out", type=Path, default=Path("results/lambda_sweep"))
+    parser.add_argument("--model-error", type=int, default=0, metavar="N",
+                        help="also estimate the model error from N prior flames and print the "
+                             "discrepancy principle's pick with tau = 1 + that error")
     parser.add_argument("--resolved", action="store_true",
                         help="make the data from the truth averaged onto the reconstruction grid "
                              "(as at the paper's size, where the truth's grid is the "
@@ -56,13 +61,25 @@ if __name__ == "__main__":
               f"{summary['iterations']} |", flush=True)
     lams, chi2, phi, mse = zip(*points, strict=True)
     best = lams[mse.index(min(mse))]
-    passing = [lam for lam, c in zip(lams, chi2, strict=True) if c <= m]
-    discrepancy = max(passing) if passing else lams[chi2.index(min(chi2))]
     print(f"best against the truth: λ = {best:g}")
-    print(f"discrepancy principle (τ = 1): λ = {discrepancy:g}"
-          + ("" if passing else " (no λ reaches χ² <= M: smallest misfit)"))
+
+    def pick(tau):
+        passing = [lam for lam, c in zip(lams, chi2, strict=True) if c <= tau * m]
+        return (f"λ = {max(passing):g}" if passing else
+                f"λ = {lams[chi2.index(min(chi2))]:g} (no λ reaches χ² <= τM: smallest misfit)")
+
+    print(f"discrepancy principle (τ = 1): {pick(1.0)}")
+    if args.model_error:
+        error = estimate_model_error(cfg, scene, measurement, n_flames=args.model_error,
+                                     seed=cfg["seed"], log=print)
+        print(f"discrepancy principle (τ = 1 + model error = {error.tau:.4g}): "
+              f"{pick(error.tau)}")
     if len(lams) >= 4:
         with warnings.catch_warnings(record=True):
             warnings.simplefilter("always")
-            corner = solvers.l_curve(lams, chi2, phi, n_measurements=m)
-        print(f"L-curve: λ = {corner.lam:g} ({corner.message})")
+            try:
+                corner = solvers.l_curve(lams, chi2, phi, n_measurements=m)
+            except ValueError as error:  # e.g. too few distinct points
+                print(f"L-curve: none ({error})")
+            else:
+                print(f"L-curve: λ = {corner.lam:g} ({corner.message})")

@@ -82,8 +82,9 @@ def _public_data(module_name: str) -> list[tuple[str, list[str]]]:
                 or ("", name) in own):
             continue
         doc = []
+        package = module_name.split(".")[0]
         for other in [m for n, m in sorted(sys.modules.items())
-                      if n == module_name or n.startswith(f"{module_name}.")]:
+                      if n == module_name or n.startswith(f"{package}.")]:
             found = getattr(other, name, None) is obj and ModuleAnalyzer.for_module(
                 other.__name__).find_attr_docs().get(("", name))
             if found:

@@ -36,7 +36,7 @@ import xarray as xr
 from pyevtk.hl import imageToVTK
 
 from invflame import __version__
-from invflame.field import FIELD_NAMES, Field
+from invflame.field import Field
 
 FIELD_SETS = {"truth": "truth.npz", "start": "initial.npz", "reconstruction": "reconstruction.npz"}
 """Field set name → its ``.npz`` in a run folder, in the order they are exported."""
@@ -53,9 +53,11 @@ QUANTITIES = {
     "CO2": ("X_CO2", "1", "mole fraction of CO2", "mole_fraction_of_carbon_dioxide_in_air"),
     "H2O": ("X_H2O", "1", "mole fraction of H2O", "mole_fraction_of_water_vapor_in_air"),
     "CH4": ("X_CH4", "1", "mole fraction of CH4", "mole_fraction_of_methane_in_air"),
+    "soot": ("f_v", "1", "soot volume fraction", None),
 }
-"""Each field of :data:`invflame.field.FIELD_NAMES` as exported: name, units, long name and CF
-standard name (CF calls any gas mixture "air")."""
+"""Each field of :data:`invflame.field.SOOTY_FIELD_NAMES` as exported: name, units, long name
+and CF standard name (CF calls any gas mixture "air"; it names no soot volume fraction, so
+``f_v`` has none). A field set exports the fields it holds (:attr:`invflame.field.Field.names`)."""
 
 _AXES = ("x", "y", "z")
 
@@ -66,7 +68,7 @@ def array_name(field_name: str) -> str:
     Parameters
     ----------
     field_name : str
-        One of :data:`invflame.field.FIELD_NAMES`.
+        One of :data:`invflame.field.SOOTY_FIELD_NAMES`.
     """
     name, units, _, _ = QUANTITIES[field_name]
     return f"{name} [{units}]"
@@ -101,7 +103,7 @@ def write_vti(field: Field, path) -> Path:
     if path.suffix != ".vti":
         raise ValueError(f"VTK image data files end in .vti; got {path}")
     grid = field.grid
-    cells = {array_name(name): np.asfortranarray(field[name]) for name in FIELD_NAMES}
+    cells = {array_name(name): np.asfortranarray(field[name]) for name in field.names}
 
     def write(temporary: Path) -> str:
         # plain floats: pyevtk prints numpy scalars with their repr, which VTK cannot read
@@ -161,12 +163,13 @@ def fields_dataset(fields: dict[str, Field], attributes: dict | None = None) -> 
                 "(Field.resample) first")
     variables = {}
     for set_name, field in fields.items():
-        for field_name in FIELD_NAMES:
+        for field_name in field.names:
             name, units, long_name, standard_name = QUANTITIES[field_name]
+            attrs = {"units": units, "long_name": f"{long_name} ({set_name})",
+                     "standard_name": standard_name, "field_set": set_name}
             variables[f"{set_name}_{name}"] = xr.Variable(
                 _AXES[::-1], field[field_name].T,
-                {"units": units, "long_name": f"{long_name} ({set_name})",
-                 "standard_name": standard_name, "field_set": set_name})
+                {k: v for k, v in attrs.items() if v is not None})
     now = datetime.datetime.now(datetime.UTC).replace(microsecond=0).isoformat()
     attrs = {"Conventions": "CF-1.10",
              "source": f"invflame {__version__}",

@@ -3,11 +3,14 @@
 A :class:`Field` is what the ground truth, the synthetic phantoms and the reconstructions have in
 common: a :class:`~invflame.geometry.VoxelGrid`, one float32 array of shape
 ``(4, nx, ny, nz)`` holding ``T`` [K], ``X_CO2``, ``X_H2O``, ``X_CH4`` (mole fractions, 1) in that
-order, and a metadata dict (provenance: solver, case, time, seed, ...).
+order, and a metadata dict (provenance: solver, case, time, seed, ...). A sooting flame carries
+a fifth field, the soot volume fraction ``f_v`` (1), shape ``(5, nx, ny, nz)``
+(:data:`SOOT_NAME`, :meth:`Field.with_soot`).
 
 Resampling to another grid averages cells with molar-density weights ``c = p / (R T)`` (uniform
 pressure), see :func:`resample_values`: the coarse cell then holds the same number of moles of
-every species, and of gas in total, as the fine cells it covers.
+every species, and of gas in total, as the fine cells it covers; a soot volume fraction is
+averaged by volume.
 """
 
 from __future__ import annotations
@@ -26,28 +29,39 @@ FIELD_NAMES = ("T", "CO2", "H2O", "CH4")
 SPECIES = FIELD_NAMES[1:]
 """Species whose mole fractions a field carries."""
 
+SOOT_NAME = "soot"
+"""Name of the optional fifth field, the soot volume fraction :math:`f_v` (dimensionless)."""
+
+SOOTY_FIELD_NAMES = (*FIELD_NAMES, SOOT_NAME)
+"""Order of the fields of a sooting flame: T [K], mole fractions, then :math:`f_v` [1]."""
+
 _SUM_TOLERANCE = 1e-5  # float32 rounding allowance on sum(X) <= 1
 
 
-def validate_values(values: np.ndarray, grid: VoxelGrid) -> None:
+def validate_values(values: np.ndarray, grid: VoxelGrid, *, mixture: bool = True) -> None:
     """Check a field array against a grid; raise ``ValueError`` saying what is wrong.
 
     Parameters
     ----------
-    values : numpy.ndarray, shape (4, nx, ny, nz)
-        ``T`` [K] then mole fractions of CO2, H2O, CH4 [1].
+    values : numpy.ndarray, shape (4, nx, ny, nz) or (5, nx, ny, nz)
+        ``T`` [K] then mole fractions of CO2, H2O, CH4 [1], then optionally the soot volume
+        fraction [1], in [0, 1).
     grid : VoxelGrid
         Grid whose ``shape`` must be ``(nx, ny, nz)``.
+    mixture : bool, optional
+        Also check that the mole fractions sum to at most 1 (default). False checks each
+        field's own range only, as for the iterates of a solver bounded field by field.
     """
-    expected = (len(FIELD_NAMES), *grid.shape)
-    if values.shape != expected:
+    if values.shape not in ((len(FIELD_NAMES), *grid.shape), (len(SOOTY_FIELD_NAMES),
+                                                                 *grid.shape)):
         raise ValueError(
-            f"field values must have shape {expected} = (fields {FIELD_NAMES}, *grid.shape); "
-            f"got {values.shape}"
+            f"field values must have shape {(len(FIELD_NAMES), *grid.shape)} = (fields "
+            f"{FIELD_NAMES}, *grid.shape), or {(len(SOOTY_FIELD_NAMES), *grid.shape)} with the "
+            f"soot volume fraction last; got {values.shape}"
         )
     bad = ~np.isfinite(values)
     if bad.any():
-        names = [FIELD_NAMES[i] for i in np.unique(np.nonzero(bad)[0])]
+        names = [SOOTY_FIELD_NAMES[i] for i in np.unique(np.nonzero(bad)[0])]
         raise ValueError(f"field values contain NaN or inf in {names} ({int(bad.sum())} entries)")
     t_min = float(values[0].min())
     if t_min <= 0:
@@ -59,31 +73,41 @@ def validate_values(values: np.ndarray, grid: VoxelGrid) -> None:
                 f"mole fraction X_{name} must lie in [0, 1]; got range [{lo}, {hi}] "
                 "(clip round-off before building the field)"
             )
-    total = float(values[1:].sum(axis=0).max())
-    if total > 1 + _SUM_TOLERANCE:
+    if len(values) == len(SOOTY_FIELD_NAMES):
+        lo, hi = float(values[-1].min()), float(values[-1].max())
+        if lo < 0 or hi >= 1:
+            raise ValueError(f"soot volume fraction must lie in [0, 1); got range [{lo}, {hi}]")
+    total = float(values[1:len(FIELD_NAMES)].sum(axis=0).max())
+    if mixture and total > 1 + _SUM_TOLERANCE:
         raise ValueError(
             f"mole fractions of {SPECIES} must sum to at most 1; maximum sum is {total}"
         )
 
 
 class Field:
-    """Temperature and mole fractions of CO2, H2O, CH4 on a voxel grid.
+    """Temperature and mole fractions of CO2, H2O, CH4 on a voxel grid, and soot if any.
 
     Parameters
     ----------
     grid : VoxelGrid
         Grid of the voxels (m).
-    values : array_like, shape (4, nx, ny, nz)
-        ``T`` [K], ``X_CO2``, ``X_H2O``, ``X_CH4`` [1] per voxel, indexed ``[field, ix, iy, iz]``;
-        stored as float32 (read-only).
+    values : array_like, shape (4, nx, ny, nz) or (5, nx, ny, nz)
+        ``T`` [K], ``X_CO2``, ``X_H2O``, ``X_CH4`` [1] per voxel, indexed ``[field, ix, iy, iz]``,
+        then optionally the soot volume fraction [1]; stored as float32 (read-only).
     metadata : dict, optional
         JSON-serialisable provenance (solver, version, case, time in s, seed, ...).
+
+    Attributes
+    ----------
+    names : tuple of str
+        The fields held, :data:`FIELD_NAMES` or, with soot, :data:`SOOTY_FIELD_NAMES`.
 
     Raises
     ------
     ValueError
         If the shape does not match the grid, a value is not finite, ``T <= 0``, a mole
-        fraction is outside [0, 1] or the mole fractions sum to more than 1.
+        fraction is outside [0, 1], the mole fractions sum to more than 1 or a soot volume
+        fraction is outside [0, 1).
     """
 
     names = FIELD_NAMES
@@ -96,6 +120,7 @@ class Field:
         arr.setflags(write=False)
         self.grid = grid
         self.values = arr
+        self.names = SOOTY_FIELD_NAMES if len(arr) == len(SOOTY_FIELD_NAMES) else FIELD_NAMES
         self.metadata = dict(metadata or {})
 
     def __repr__(self) -> str:
@@ -112,8 +137,36 @@ class Field:
             raise KeyError(f"unknown species {species!r}; a field carries {SPECIES}")
         return self.values[FIELD_NAMES.index(species)]
 
+    @property
+    def soot(self) -> np.ndarray | None:
+        """Soot volume fraction (1), shape ``(nx, ny, nz)``; None for a soot-free field."""
+        return self.values[-1] if self.names == SOOTY_FIELD_NAMES else None
+
+    @property
+    def gas(self) -> Field:
+        """The gas alone: T and mole fractions, without the soot."""
+        if self.soot is None:
+            return self
+        return Field(self.grid, self.values[:len(FIELD_NAMES)], self.metadata)
+
+    def with_soot(self, soot) -> Field:
+        """This gas with a soot volume fraction per voxel (1, in [0, 1)); None: soot-free.
+
+        Parameters
+        ----------
+        soot : array_like, shape ``grid.shape``, or None
+            Soot volume fraction.
+        """
+        gas = self.gas.values
+        if soot is None:
+            return Field(self.grid, gas, self.metadata)
+        return Field(self.grid, np.concatenate([gas, np.asarray(soot, np.float32)[None]]),
+                     self.metadata)
+
     def __getitem__(self, name: str) -> np.ndarray:
-        """Field by name: "T" (K) or a species (mole fraction)."""
+        """Field by name: "T" (K), a species (mole fraction) or, with soot, "soot" (1)."""
+        if name == SOOT_NAME and self.soot is not None:
+            return self.soot
         return self.T if name == "T" else self.X(name)
 
     def resample(self, grid: VoxelGrid) -> Field:
@@ -133,7 +186,7 @@ class Field:
     def summary(self) -> str:
         """Min / max / mean of each field and the extent of ``T > 500 K`` as text."""
         lines = [f"grid {self.grid.shape} over {self.grid.lower} .. {self.grid.upper} m"]
-        for name, v in zip(FIELD_NAMES, self.values, strict=True):
+        for name, v in zip(self.names, self.values, strict=True):
             mean = v.mean(dtype=np.float64)
             lines.append(f"{name:>4}: min {v.min():.6g}  max {v.max():.6g}  mean {mean:.6g}")
         lo, hi = hot_extent(self, 500.0)
@@ -160,7 +213,7 @@ class Field:
         return write_npz(
             path,
             values=self.values,
-            names=np.array(FIELD_NAMES),
+            names=np.array(self.names),
             lower=self.grid.lower,
             upper=self.grid.upper,
             spacing=self.grid.spacing,
@@ -190,8 +243,9 @@ class Field:
         if missing:
             raise ValueError(f"{path} is not an invflame field file: missing {sorted(missing)}")
         names = tuple(str(n) for n in data["names"])
-        if names != FIELD_NAMES:
-            raise ValueError(f"{path} holds fields {names}; expected {FIELD_NAMES}")
+        if names not in (FIELD_NAMES, SOOTY_FIELD_NAMES):
+            raise ValueError(f"{path} holds fields {names}; expected {FIELD_NAMES}, or "
+                             f"{SOOTY_FIELD_NAMES} with soot")
         grid = VoxelGrid(
             data["lower"],
             data["upper"],
@@ -252,20 +306,21 @@ def resample_values(values: np.ndarray, src: VoxelGrid, dst: VoxelGrid) -> np.nd
     with ``w_i`` the overlap volume. So the destination voxel (at ``p`` and ``\bar T``) holds the
     same moles of gas and of each species as the source voxels: number densities, which set the
     absorption, are conserved. The temperature is the harmonic (molar) mean, a little below
-    the volume mean where the temperature varies within a voxel. For integer coarsening
-    factors on the same box this is block averaging; refining copies values (piecewise
-    constant).
+    the volume mean where the temperature varies within a voxel. A soot volume fraction is
+    averaged by volume, :math:`\bar f_v = \sum_i w_i f_{v,i} / \sum_i w_i`: the soot volume
+    is conserved. For integer coarsening factors on the same box this is block averaging;
+    refining copies values (piecewise constant).
 
     Parameters
     ----------
-    values : numpy.ndarray, shape (4, *src.shape)
-        ``T`` [K] then mole fractions.
+    values : numpy.ndarray, shape (4, *src.shape) or (5, *src.shape)
+        ``T`` [K] then mole fractions, then optionally the soot volume fraction [1].
     src, dst : VoxelGrid
         Source and destination grids; ``dst``'s box must lie inside ``src``'s.
 
     Returns
     -------
-    numpy.ndarray, shape (4, *dst.shape), float32
+    numpy.ndarray, shape (len(values), *dst.shape), float32
     """
     tol = 1e-9 * float(np.max(src.extent))
     if np.any(dst.lower < src.lower - tol) or np.any(dst.upper > src.upper + tol):
@@ -287,7 +342,11 @@ def resample_values(values: np.ndarray, src: VoxelGrid, dst: VoxelGrid) -> np.nd
     v = values.astype(np.float64)
     density = 1.0 / v[0]  # molar density up to the constant p / R
     weight = average(density)
-    out = np.empty((len(FIELD_NAMES), *dst.shape))
-    out[0] = average(np.ones_like(density)) / weight
-    out[1:] = np.stack([average(density * x) for x in v[1:]]) / weight
+    volume = average(np.ones_like(density))
+    out = np.empty((len(v), *dst.shape))
+    out[0] = volume / weight
+    out[1:len(FIELD_NAMES)] = np.stack([average(density * x)
+                                        for x in v[1:len(FIELD_NAMES)]]) / weight
+    if len(v) == len(SOOTY_FIELD_NAMES):
+        out[-1] = average(v[-1]) / volume
     return out.astype(np.float32)

@@ -65,6 +65,14 @@ def _checked_soot(soot, grid: VoxelGrid) -> np.ndarray:
     return soot
 
 
+def _soot_setting(soot, soot_input: bool, grid: VoxelGrid) -> tuple[np.ndarray | None, bool]:
+    """The known soot field (checked) and whether soot is an input field; not both."""
+    if soot is not None and soot_input:
+        raise ValueError("give either a known soot field (soot) or soot as an input field "
+                         "(soot_input=True), not both")
+    return (None if soot is None else _checked_soot(soot, grid)), bool(soot_input)
+
+
 def _window_slice(wavenumber: np.ndarray, window) -> slice:
     if window is None:
         return slice(None)
@@ -140,6 +148,10 @@ class Scene:
     soot_constant : float, optional
         The Rayleigh constant :math:`C` of the soot
         (default :func:`operators.rte_tables.rayleigh_soot_constant`).
+    soot_input : bool, optional
+        True: the soot volume fraction is a fifth field of the map's input, after the mole
+        fractions (:attr:`field_shape` ``(5, nx, ny, nz)``), to be reconstructed; the map then
+        differentiates with respect to it too. Not with ``soot``. Default False.
 
     Attributes
     ----------
@@ -161,6 +173,8 @@ class Scene:
         The background behind the flame.
     soot : ndarray, shape ``grid.shape``, or None
         The known soot volume fraction.
+    soot_input : bool
+        Whether the soot volume fraction is the fifth field of the input.
     """
 
     def __init__(self, grid: VoxelGrid, rig: CameraRig, table: AbsorptionTable,
@@ -168,7 +182,7 @@ class Scene:
                  dtype=np.float32, planck: str = "table", memory_budget: int | None = None,
                  batch_rays: int | None = None, devices=None, rays_per_pixel: int = 1,
                  background: Background | None = None, soot=None,
-                 soot_constant: float | None = None):
+                 soot_constant: float | None = None, soot_input: bool = False):
         if not isinstance(grid, VoxelGrid):
             raise TypeError(f"grid must be an invflame.geometry.VoxelGrid, got {type(grid)}")
         if not isinstance(rig, CameraRig):
@@ -189,7 +203,7 @@ class Scene:
         self.ils = ILSConvolution(self.wavenumber, self.n_rays, resolution, out_wavenumber,
                                   dtype=self.dtype)
         self.out_wavenumber = self.ils.out_wavenumber
-        self.soot = None if soot is None else _checked_soot(soot, grid)
+        self.soot, self.soot_input = _soot_setting(soot, soot_input, grid)
         self.tables = self._tables(soot_constant)
         self.mesh = None if devices is None else ray_mesh(devices)
         n_traced = self.segments.n_rays
@@ -205,12 +219,13 @@ class Scene:
 
     def _tables(self, soot_constant: float | None) -> RTETables:
         """The kernel's tables on the scene's window, with a soot row when it has soot."""
-        if self.soot is not None and soot_constant is None:
+        sooty = self.soot is not None or self.soot_input
+        if sooty and soot_constant is None:
             soot_constant = rayleigh_soot_constant()
         return RTETables.from_spline(self.wavenumber, self.table.temperatures,
                                      self.table.spline.coef[..., self._band], self.table.pressure,
                                      self.dtype, self.planck,
-                                     soot=None if self.soot is None else soot_constant)
+                                     soot=soot_constant if sooty else None)
 
     def _operator(self) -> KernelOperator:
         """The forward map on the scene's rays, tables, instrument and background."""
@@ -234,7 +249,8 @@ class Scene:
                 arrays = (replicate(self.tables, self.mesh), *place_rays(rays, 0, self.mesh),
                           *replicate(constants, self.mesh))
         return KernelOperator(self._measurement, arrays, self.batch_rays, self.field_shape,
-                              self.data_shape, self.dtype, "Scene")
+                              self.data_shape, self.dtype, "Scene",
+                              domain=partial(self.check_fields, mixture=False))
 
     def _sub_ray_camera(self) -> np.ndarray:
         """The camera (index in the rig) of every traced sub-ray, ``(n_rays · rays_per_pixel,)``."""
@@ -258,20 +274,24 @@ class Scene:
         scene.operator = scene._operator()
         return scene
 
-    def with_soot(self, soot, soot_constant: float | None = None) -> Scene:
+    def with_soot(self, soot, soot_constant: float | None = None,
+                  soot_input: bool = False) -> Scene:
         """The same scene (rays, instrument, background, devices) with another known soot
-        field.
+        field, or with the soot volume fraction as a fifth input field.
 
         Parameters
         ----------
         soot : array_like, shape ``grid.shape``, or None
-            Soot volume fraction per voxel (dimensionless, in [0, 1)); None: no soot.
+            Soot volume fraction per voxel (dimensionless, in [0, 1)); None: no known soot.
         soot_constant : float, optional
             As for :class:`Scene`.
+        soot_input : bool, optional
+            As for :class:`Scene` (not with ``soot``).
         """
         scene = copy.copy(self)
-        scene.__dict__.pop("emission", None)
-        scene.soot = None if soot is None else _checked_soot(soot, self.grid)
+        for cached in ("emission", "sampling"):
+            scene.__dict__.pop(cached, None)
+        scene.soot, scene.soot_input = _soot_setting(soot, soot_input, self.grid)
         scene.tables = scene._tables(soot_constant)
         scene.operator = scene._operator()
         return scene
@@ -333,8 +353,9 @@ class Scene:
 
     @property
     def field_shape(self) -> tuple[int, int, int, int]:
-        """Input shape ``(4, nx, ny, nz)``: T (K), then mole fractions of CO2, H2O, CH4."""
-        return (1 + len(self.table.species), *self.grid.shape)
+        """Input shape ``(4, nx, ny, nz)``: T (K), then mole fractions of CO2, H2O, CH4; with
+        :attr:`soot_input` ``(5, nx, ny, nz)``, the soot volume fraction (1) last."""
+        return (1 + len(self.table.species) + int(self.soot_input), *self.grid.shape)
 
     @property
     def data_shape(self) -> tuple[int, int]:
@@ -387,21 +408,40 @@ class Scene:
         with precision(self.dtype):
             return to_numpy(self.forward(fields))
 
-    def check_fields(self, fields) -> np.ndarray:
+    def check_fields(self, fields, mixture: bool = True) -> np.ndarray:
         """``fields`` as a NumPy array, if it is a physical state the tables cover.
+
+        The forward map (:attr:`operator`) checks every point it is evaluated or linearized at
+        so, with ``mixture=False``: solvers bound each field to its own range, and their
+        iterates may pass through mole fractions summing above 1, where the model is still
+        defined (absorption is linear in each mole fraction).
+
+        Parameters
+        ----------
+        fields : array_like, shape :attr:`field_shape`
+            T in K, mole fractions and, with soot as an input, the soot volume fraction.
+        mixture : bool, optional
+            Also refuse mole fractions summing above 1 (default).
 
         Raises
         ------
         ValueError
             For what :func:`invflame.field.validate_values` refuses (a wrong shape, NaN, T ≤ 0,
-            a mole fraction outside [0, 1], mole fractions summing above 1) and for a
-            temperature outside the absorption table's range (K); the message names the field
-            and the offending values.
+            a mole fraction outside [0, 1], mole fractions summing above 1, a soot volume
+            fraction outside [0, 1)), for another number of fields than :attr:`field_shape`
+            and for a temperature outside the absorption table's range (K); the message names
+            the field and the offending values.
         """
         fields = to_numpy(fields)
-        validate_values(fields, self.grid)
+        validate_values(fields, self.grid, mixture=mixture)
+        if fields.shape != self.field_shape:
+            soot = "with" if self.soot_input else "without"
+            raise ValueError(f"fields must have shape {self.field_shape} (a scene {soot} soot "
+                             f"as an input field), got {fields.shape}")
         t_min, t_max = float(self.table.temperatures[0]), float(self.table.temperatures[-1])
-        if fields[0].min() < t_min or fields[0].max() > t_max:
+        # the bounds as the fields' own precision rounds them (a float32 solver's bound)
+        eps = np.finfo(fields.dtype).eps if np.issubdtype(fields.dtype, np.floating) else 0.0
+        if fields[0].min() < t_min * (1 - eps) or fields[0].max() > t_max * (1 + eps):
             raise ValueError(f"temperature spans {fields[0].min():g}-{fields[0].max():g} K, "
                              f"outside the absorption table's {t_min:g}-{t_max:g} K")
         return fields

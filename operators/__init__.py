@@ -6,17 +6,10 @@ it changes nothing in the process: it does not import torch (only building a
 64-bit mode; an operator of dtype float64 computes in float64 inside :func:`precision` only.
 """
 
+import operators.algebra  # noqa: F401  (registers the combinations that ``A @ B`` etc. build)
+from operators.adapters import JaxOperator, TorchOperator, aslinearoperator
 from operators.averaging import RowMean
-from operators.base import (
-    Identity,
-    Jacobian,
-    JaxOperator,
-    LinearOperator,
-    Operator,
-    TorchOperator,
-    aslinearoperator,
-    precision,
-)
+from operators.base import Identity, Jacobian, LinearOperator, Operator, precision
 from operators.checks import (
     dottest,
     gradient_taylor_test,

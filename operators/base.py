@@ -18,8 +18,14 @@ The algebra follows the chain rule: ``A @ B`` (composition, ``B`` applied first)
 ``A - B``, ``c * A``, ``-A``, ``A ** p``, ``A.T``, and the stacks
 :func:`~operators.combinators.vstack` and :func:`~operators.combinators.block_diag`
 (:mod:`operators.combinators`); every one returns an operator, linear when all its parts
-are. A combination linearizes each part once per point: the Jacobian of ``A + B`` at ``x``
-is the sum of the parts' Jacobians at ``x``, built once, and so on for every combinator.
+are, and linearizes each part once per point (:mod:`operators.algebra`).
+
+**Where the pieces live.** This module holds the base classes and the operators their own
+methods return: :class:`Jacobian`, :class:`Adjoint` and :class:`Identity`. The combinations
+(:mod:`operators.algebra`) and the wrappers of pylops operators and of JAX or torch functions
+(:mod:`operators.adapters`) subclass the base classes, so they import this module and never the
+reverse: they :func:`register` themselves here, and the methods build them through that
+registry, which also keeps them importable from here (``operators.base.Composition``).
 
 **Shapes are checked.** An input must have the operator's shape (``dims`` for ``x`` and ``v``,
 ``dimsd`` for ``w``); a linear operator also takes the flat vector of as many elements, the
@@ -36,13 +42,36 @@ from __future__ import annotations
 import contextlib
 import functools
 import numbers
-from collections.abc import Sequence
+import types
 
 import jax
 import numpy as np
 
-from operators.jax_operator import JaxFunction
 from operators.pylops_import import pylops
+
+#: What :func:`register` received, by name.
+_registered = types.SimpleNamespace()
+
+
+def register(obj):
+    """Make ``obj``, a class or function of a module that imports this one, available to the
+    methods of :class:`Operator` and importable from here as ``operators.base.<name>``.
+
+    Parameters
+    ----------
+    obj : type or callable
+        Registered under its ``__name__``; returned unchanged (use as a decorator).
+    """
+    setattr(_registered, obj.__name__, obj)
+    return obj
+
+
+def __getattr__(name):
+    """A registered name (:func:`register`), as an attribute of this module."""
+    try:
+        return getattr(_registered, name)
+    except AttributeError:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
 
 
 def _shape(dims) -> tuple[int, ...]:
@@ -168,20 +197,21 @@ class Operator:
     # -- construction from frameworks ------------------------------------------------------
     @staticmethod
     def from_jax(fun, dims, dimsd, dtype=np.float64, name=None) -> Operator:
-        """Wrap a JAX function; see :class:`JaxOperator`."""
-        return JaxOperator(fun, dims, dimsd, dtype=dtype, name=name)
+        """Wrap a JAX function; see :class:`~operators.adapters.JaxOperator`."""
+        return _registered.JaxOperator(fun, dims, dimsd, dtype=dtype, name=name)
 
     @staticmethod
     def from_torch(fun, dims, dimsd, dtype=np.float64, device="cpu", name=None) -> Operator:
-        """Wrap a torch function; see :class:`TorchOperator`."""
-        return TorchOperator(fun, dims, dimsd, dtype=dtype, device=device, name=name)
+        """Wrap a torch function; see :class:`~operators.adapters.TorchOperator`."""
+        return _registered.TorchOperator(fun, dims, dimsd, dtype=dtype, device=device,
+                                         name=name)
 
     # -- algebra ----------------------------------------------------------------------------
     def __matmul__(self, other):
         if isinstance(other, pylops.LinearOperator) and not isinstance(other, Operator):
-            other = aslinearoperator(other)
+            other = _registered.aslinearoperator(other)
         if isinstance(other, Operator):
-            return _linear_if_possible(Composition(self, other))
+            return _registered._linear_if_possible(_registered.Composition(self, other))
         if self.linear:
             return pylops.LinearOperator.dot(self, other)
         raise TypeError(
@@ -192,7 +222,7 @@ class Operator:
     def __add__(self, other):
         if not isinstance(other, Operator):
             return NotImplemented
-        return _linear_if_possible(Sum([self, other]))
+        return _registered._linear_if_possible(_registered.Sum([self, other]))
 
     def __sub__(self, other):
         if not isinstance(other, Operator):
@@ -204,15 +234,13 @@ class Operator:
 
     def __mul__(self, other):
         if isinstance(other, numbers.Number):
-            return _linear_if_possible(Scaled(self, other))
+            return _registered._linear_if_possible(_registered.Scaled(self, other))
         if self.linear and not isinstance(other, Operator):
             return pylops.LinearOperator.dot(self, other)
         return NotImplemented
 
     def __rmul__(self, other):
-        if isinstance(other, numbers.Number):
-            return _linear_if_possible(Scaled(self, other))
-        return NotImplemented
+        return self * other if isinstance(other, numbers.Number) else NotImplemented
 
     def __pow__(self, p):
         """``F ** p``: ``F`` composed with itself ``p`` times (the identity for ``p = 0``)."""
@@ -368,295 +396,3 @@ class Jacobian(LinearOperator):
 
     def _adjoint(self, w):
         return np.asarray(self._apply_vjp(w))
-
-
-def _jacobian_from(op: Operator, x, value, derivative: LinearOperator) -> Jacobian:
-    """The Jacobian of ``op`` at ``x`` applied through an already assembled linear map."""
-    return Jacobian(op, x, value, jvp=derivative, vjp=derivative.adjoint)
-
-
-def _push(op: Operator, x, v):
-    """:math:`J_{op}(x) v` (``x`` unused, and may be None, when ``op`` is linear)."""
-    return op(v) if op.linear else op.jvp(x, v)
-
-
-def _pull(op: Operator, x, w):
-    r""":math:`J_{op}(x)^\mathsf{T} w` (``x`` unused, and may be None, when ``op`` is linear)."""
-    return op.adjoint(w) if op.linear else op.vjp(x, w)
-
-
-class Composition(Operator):
-    r"""``outer @ inner``: :math:`x \mapsto \text{outer}(\text{inner}(x))`, chain rule.
-
-    The inner output is reshaped to the outer input when the two shapes differ in layout but
-    not in size (checked here, once).
-    """
-
-    def __init__(self, outer: Operator, inner: Operator):
-        if _size(outer.dims) != _size(inner.dimsd):
-            raise ValueError(
-                f"cannot compose {outer.name} (input {outer.dims}) after {inner.name} "
-                f"(output {inner.dimsd}): sizes differ"
-            )
-        dtype = np.result_type(outer.dtype, inner.dtype)
-        super().__init__(inner.dims, outer.dimsd, dtype=dtype,
-                         name=f"({outer.name} @ {inner.name})")
-        self.outer, self.inner = outer, inner
-        self.parts = (outer, inner)
-
-    def _mid(self, y):
-        return np.reshape(y, self.outer.dims)
-
-    def _forward(self, x):
-        return self.outer(self._mid(self.inner(x)))
-
-    def _inner_value(self, x):
-        return None if self.outer.linear else self._mid(self.inner(x))
-
-    def _jvp(self, x, v):
-        return _push(self.outer, self._inner_value(x), self._mid(_push(self.inner, x, v)))
-
-    def _vjp(self, x, w):
-        inner_w = np.reshape(_pull(self.outer, self._inner_value(x), w), self.inner.dimsd)
-        return _pull(self.inner, x, inner_w)
-
-    def linearize(self, x) -> Jacobian:
-        r"""Both parts linearized once: :math:`J = J_\text{outer}(\text{inner}(x))\,
-        J_\text{inner}(x)`."""
-        x = self._as_input(x)
-        j_inner = self.inner.linearize(x)
-        j_outer = self.outer.linearize(self._mid(j_inner.value))
-        return _jacobian_from(self, x, j_outer.value,
-                              _linear_if_possible(Composition(j_outer, j_inner)))
-
-
-class _Combination(Operator):
-    """An operator assembled from ``parts`` applied to (pieces of) one input.
-
-    Subclasses say how the input is handed to the parts (:meth:`_inputs`), how the parts'
-    outputs are assembled (:meth:`_assemble`) and the adjoints of both (:meth:`_cotangents`,
-    :meth:`_gather`); value, Jacobian products and the once-per-point linearization follow.
-    """
-
-    parts: tuple[Operator, ...]
-
-    def _rebuild(self, parts: Sequence[Operator]) -> Operator:
-        """The same combination of other operators (e.g. of the parts' Jacobians)."""
-        raise NotImplementedError
-
-    def _inputs(self, x) -> list:
-        return [np.reshape(x, p.dims) for p in self.parts]
-
-    def _gather(self, grads) -> np.ndarray:
-        return sum(np.reshape(g, self.dims) for g in grads)
-
-    def _assemble(self, outputs) -> np.ndarray:
-        raise NotImplementedError
-
-    def _cotangents(self, w) -> list:
-        raise NotImplementedError
-
-    def _forward(self, x):
-        return self._assemble([p(xi) for p, xi in zip(self.parts, self._inputs(x), strict=True)])
-
-    def _jvp(self, x, v):
-        return self._assemble([_push(p, xi, vi) for p, xi, vi in
-                               zip(self.parts, self._inputs(x), self._inputs(v), strict=True)])
-
-    def _vjp(self, x, w):
-        xs = [None] * len(self.parts) if x is None else self._inputs(x)
-        return self._gather([_pull(p, xi, wi) for p, xi, wi in
-                             zip(self.parts, xs, self._cotangents(w), strict=True)])
-
-    def linearize(self, x) -> Jacobian:
-        """Each part linearized once at its input; the Jacobian is the same combination of
-        the parts' Jacobians."""
-        x = self._as_input(x)
-        jacobians = [p.linearize(xi) for p, xi in zip(self.parts, self._inputs(x), strict=True)]
-        value = self._assemble([j.value for j in jacobians])
-        return _jacobian_from(self, x, value, _linear_if_possible(self._rebuild(jacobians)))
-
-
-class Sum(_Combination):
-    """``A + B + ...`` of operators with inputs and outputs of the same sizes (the shapes of
-    the first)."""
-
-    def __init__(self, ops: Sequence[Operator]):
-        ops = list(ops)
-        first = ops[0]
-        for op in ops[1:]:
-            if _size(op.dims) != _size(first.dims) or _size(op.dimsd) != _size(first.dimsd):
-                raise ValueError(
-                    f"cannot add {first.name} ({first.dims} -> {first.dimsd}) and {op.name} "
-                    f"({op.dims} -> {op.dimsd}): sizes differ"
-                )
-        super().__init__(first.dims, first.dimsd, dtype=np.result_type(*[o.dtype for o in ops]),
-                         name="(" + " + ".join(o.name for o in ops) + ")")
-        self.parts = tuple(ops)
-
-    def _rebuild(self, parts):
-        return Sum(parts)
-
-    def _assemble(self, outputs):
-        return sum(np.reshape(y, self.dimsd) for y in outputs)
-
-    def _cotangents(self, w):
-        return [np.reshape(w, p.dimsd) for p in self.parts]
-
-
-class Scaled(_Combination):
-    """``c * A`` for a real scalar ``c``."""
-
-    def __init__(self, op: Operator, scale: float):
-        super().__init__(op.dims, op.dimsd, dtype=op.dtype, name=f"{scale:g}*{op.name}")
-        self.scale = float(scale)
-        self.parts = (op,)
-
-    def _rebuild(self, parts):
-        return Scaled(parts[0], self.scale)
-
-    def _assemble(self, outputs):
-        return self.scale * outputs[0]
-
-    def _cotangents(self, w):
-        return [self.scale * w]
-
-
-
-class _LinearView(LinearOperator):
-    """A combination of linear operators seen as one :class:`LinearOperator`.
-
-    Attributes
-    ----------
-    combination : Operator
-        The combination itself (e.g. a :class:`~operators.combinators.VStack`, for its
-        ``split``/``join``).
-    """
-
-    def __init__(self, op: Operator):
-        super().__init__(op.dims, op.dimsd, dtype=op.dtype, name=op.name)
-        self.combination = op
-
-    def _forward(self, x):
-        return self.combination._forward(x)
-
-    def _adjoint(self, y):
-        return self.combination._vjp(None, y)
-
-
-def _linear_if_possible(op: Operator) -> Operator:
-    """A combination (``op.parts``: the operators it combines) as a linear operator when every
-    part is linear, else unchanged."""
-    return _LinearView(op) if all(p.linear for p in op.parts) else op
-
-
-
-class _PylopsWrapper(LinearOperator):
-    def __init__(self, op: pylops.LinearOperator, name: str | None = None):
-        super().__init__(getattr(op, "dims", (op.shape[1],)),
-                         getattr(op, "dimsd", (op.shape[0],)),
-                         dtype=op.dtype, name=name or getattr(op, "name", None) or "pylops")
-        self.op = op
-
-    def _forward(self, x):
-        return np.asarray(self.op.matvec(x.ravel())).reshape(self.dimsd)
-
-    def _adjoint(self, y):
-        return np.asarray(self.op.rmatvec(y.ravel())).reshape(self.dims)
-
-
-def aslinearoperator(op, name: str | None = None) -> LinearOperator:
-    """Any pylops (or scipy) linear operator as an :class:`operators.LinearOperator`.
-
-    Parameters
-    ----------
-    op : pylops.LinearOperator or scipy.sparse.linalg.LinearOperator
-        Operator with ``matvec``/``rmatvec`` (and ideally ``dims``/``dimsd``).
-    name : str, optional
-        Label for reprs and messages.
-    """
-    if isinstance(op, LinearOperator):
-        return op
-    return _PylopsWrapper(pylops.aslinearoperator(op), name=name)
-
-
-class _FunctionOperator(Operator):
-    """An operator whose value and derivatives come from a framework function.
-
-    ``function`` offers ``forward(x)``, ``jvp(x, v)``, ``vjp(x, w)`` and ``pullback(x) ->
-    (value, jvp, vjp)`` on NumPy arrays (see :mod:`operators.jax_operator` and
-    :mod:`operators.torch_operator`).
-    """
-
-    def __init__(self, function, dims, dimsd, dtype, name):
-        super().__init__(dims, dimsd, dtype=dtype, name=name)
-        self.function = function
-
-    def _forward(self, x):
-        return self.function.forward(x)
-
-    def _jvp(self, x, v):
-        return self.function.jvp(x, v)
-
-    def _vjp(self, x, w):
-        return self.function.vjp(x, w)
-
-    def linearize(self, x) -> Jacobian:
-        """One forward pass, keeping the framework's pullback for the vjp."""
-        x = self._as_input(x)
-        value, jvp, vjp = self.function.pullback(x)
-        return Jacobian(self, x, self._result(value, self.dimsd, "forward"), jvp=jvp, vjp=vjp)
-
-
-class JaxOperator(_FunctionOperator):
-    """An :class:`Operator` from a JAX function ``fun(x) -> y``.
-
-    ``jvp`` and ``vjp`` come from :func:`jax.jvp` and :func:`jax.vjp`; all three are jit-compiled
-    once per operator. ``linearize`` runs the forward pass once and keeps JAX's pullback, so a
-    solver's value and gradient cost one forward and one reverse pass.
-
-    Parameters
-    ----------
-    fun : callable
-        JAX-traceable function from an array of shape ``dims`` to one of shape ``dimsd``.
-    dims, dimsd : tuple of int
-        Input and output shapes; the function's output shape is checked against ``dimsd``.
-    dtype : numpy dtype, optional
-        Dtype the input is cast to before calling ``fun`` (default float64, computed in JAX's
-        64-bit mode inside :func:`precision`).
-    name : str, optional
-        Label for messages.
-    """
-
-    def __init__(self, fun, dims, dimsd, dtype=np.float64, name=None):
-        super().__init__(JaxFunction(fun, dtype), dims, dimsd, dtype,
-                         name or getattr(fun, "__name__", "jax"))
-
-
-class TorchOperator(_FunctionOperator):
-    """An :class:`Operator` from a torch function ``fun(x) -> y``.
-
-    ``jvp`` and ``vjp`` come from :func:`torch.func.jvp` and :func:`torch.func.vjp`; torch is
-    imported when the first such operator is built.
-
-    Parameters
-    ----------
-    fun : callable
-        Function from a tensor of shape ``dims`` to one of shape ``dimsd``.
-    dims, dimsd : tuple of int
-        Input and output shapes; the function's output shape is checked against ``dimsd``.
-    dtype : numpy dtype, optional
-        float32 or float64 (default); the input tensor gets the matching torch dtype.
-    device : str or torch.device, optional
-        Where ``fun`` runs (default CPU).
-    name : str, optional
-        Label for messages.
-    """
-
-    def __init__(self, fun, dims, dimsd, dtype=np.float64, device="cpu", name=None):
-        from operators.torch_operator import TorchFunction
-
-        super().__init__(TorchFunction(fun, dtype, device), dims, dimsd, dtype,
-                         name or getattr(fun, "__name__", "torch"))
-        self.device = self.function.device
-

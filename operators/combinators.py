@@ -1,5 +1,5 @@
 """Stacks of operators on one input (:func:`vstack`) and block-diagonal operators on the parts
-of one input (:func:`block_diag`), with the chain rule of :class:`operators.base.Operator`.
+of one input (:func:`block_diag`), with the chain rule of :mod:`operators.algebra`.
 
 Each is linear (a :class:`operators.base.LinearOperator`) when all its blocks are, and
 linearizes each block once per point.
@@ -11,7 +11,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from operators.base import Operator, _Combination, _linear_if_possible, _size
+from operators.algebra import _Combination, _linear_if_possible
+from operators.base import Operator, _size
 
 
 def _stacked_shape(shapes: Sequence[tuple[int, ...]]) -> tuple[int, ...]:

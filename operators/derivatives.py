@@ -13,7 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from operators.base import LinearOperator, aslinearoperator
+from operators.adapters import aslinearoperator
+from operators.base import LinearOperator
 from operators.combinators import vstack
 from operators.pylops_import import pylops
 

@@ -68,6 +68,11 @@ class KernelOperator(Operator):
         Of inputs and outputs.
     name : str
         Label for messages.
+    domain : callable, optional
+        ``domain(x)`` raises ``ValueError`` (saying what is wrong) for a point ``x`` outside the
+        map's domain, where it would return garbage (e.g. temperatures outside the absorption
+        tables); called at every point the operator is evaluated or linearized at, not on the
+        directions ``v``, ``w``. Default None: no check.
 
     Attributes
     ----------
@@ -77,8 +82,9 @@ class KernelOperator(Operator):
     """
 
     def __init__(self, build: Callable, args: tuple, batch_rays: int, dims, dimsd, dtype,
-                 name: str):
+                 name: str, domain: Callable | None = None):
         super().__init__(dims, dimsd, dtype=dtype, name=name)
+        self.domain = domain
         self.args = tuple(args)
         self.batch_rays = int(batch_rays)
         reverse = build(radiance_kernel(self.batch_rays))
@@ -92,19 +98,25 @@ class KernelOperator(Operator):
     def _in(self, x):
         return to_jax(x, dtype=self.dtype)
 
+    def _at(self, x):
+        """The point ``x`` as a JAX array, once :attr:`domain` has taken it."""
+        if self.domain is not None:
+            self.domain(x)
+        return self._in(x)
+
     def _forward(self, x):
-        return to_numpy(self.function(*self.args, self._in(x)))
+        return to_numpy(self.function(*self.args, self._at(x)))
 
     def _jvp(self, x, v):
-        return to_numpy(self._tangent(self.args, self._in(x), self._in(v)))
+        return to_numpy(self._tangent(self.args, self._at(x), self._in(v)))
 
     def _vjp(self, x, w):
-        return to_numpy(self._cotangent(self.args, self._in(x), self._in(w)))
+        return to_numpy(self._cotangent(self.args, self._at(x), self._in(w)))
 
     def linearize(self, x) -> Jacobian:
         """One forward pass, keeping the kernel's pullback for the vjp."""
         with precision(self.dtype):
-            xj = self._in(self._as_input(x))
+            xj = self._at(self._as_input(x))
             value, pullback = self._value_and_pullback(self.args, xj)
         return Jacobian(
             self, to_numpy(xj), to_numpy(value),

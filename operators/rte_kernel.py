@@ -42,18 +42,22 @@ so the background enters the temperature and mole-fraction derivatives through
 :math:`\tau_\mathrm{ray}` with no term of its own)
 so the reverse sweep (a custom VJP) re-runs the segments in camera order, accumulating
 :math:`P_k` and :math:`I_{\le k}`, and needs only the final :math:`I` and arrays of one ray
-batch's spectra: no per-segment spectra are stored. The sums over wavenumber that turn these
-into cotangents of the per-segment weights are batched matrix-vector products; JAX then
-carries them to :math:`(T_k, X_{s,k}, \Delta s_k)` through the (scalar, per-segment)
-weights. Forward-mode derivatives (JVPs) run JAX's forward mode through the forward sweep,
-with the same memory.
+batch's spectra: no per-segment spectra are stored. Per segment, the optical depth is
+:math:`\tau = \sum_s a_s \tilde\sigma_s(u)` with the amounts :math:`a_s = X_s \Delta s / T`
+and the cubics :math:`\tilde\sigma_s` in the offset :math:`u` in the temperature interval,
+and :math:`B = \tilde B(u)`; so the sums over wavenumber are taken of the physical spectra,
+:math:`\sum_\eta g_\tau \tilde\sigma_s` per gas and one
+:math:`\sum_\eta (g_\tau \partial_u\tau + g_B \partial_u B)` (``n_gas + 1`` sums per
+segment, not one per spline coefficient, four per gas and four for :math:`B`); JAX then
+carries them to :math:`(T_k, X_{s,k}, \Delta s_k)` through the scalar weights
+:math:`(a_s, u)`. Forward-mode derivatives (JVPs) run JAX's forward mode through the
+forward sweep, with the same memory. ``docs/performance.md`` has the measured costs.
 
 **Layout.** Rays are sorted by their number of segments and processed in batches
 (:mod:`operators.rte_batches`), each batch sweeping only as many segments as its longest ray.
-Per segment, :math:`\tau` and :math:`B` are sums of gathered rows of the spectral tables
-(:mod:`operators.rte_tables`) times per-segment weights (:math:`X_s \Delta s / T` times
-powers of the offset in the temperature interval). ``benchmarks/bench_rte.py`` times the
-kernel against a bare exponential.
+Per segment, :math:`\tilde\sigma_s` and :math:`\tilde B` are Horner sums of gathered rows
+of the spectral tables (:mod:`operators.rte_tables`), fused by XLA into the sweep.
+``benchmarks/bench_rte.py`` times the kernel and its stages against a bare exponential.
 
 Entries of a ray after its last segment of non-zero length are padding: they contribute
 nothing, and their cotangents are zero.
@@ -86,56 +90,65 @@ def _interval(tables: RTETables, temperature):
 
 
 def _segment_weights(tables: RTETables, index, temperature, fractions, length):
-    """Weights of the table rows in the optical depth and in the Planck radiance.
+    r"""The scalars per segment that the spectra depend on.
 
-    For segments shaped ``s`` (``temperature``, ``length``; ``fractions`` is
-    ``(n_absorbing, *s)``, the soot volume fraction last when the tables have soot):
-    ``w_tau`` ``(*s, 4 n_gas [+ 1])``, the coefficients of the rows ``X_s Δs / T · u^(3-j)``
-    (the table rows carry ``σ p 10⁻⁴/k_B``) and of the soot row, ``f_v Δs``; and ``w_emit``,
-    the powers ``u^(3-j)`` ``(*s, 4)`` for the Planck table or the temperature ``(*s, 1)`` for
-    the exact law.
+    For segments shaped ``s`` (``temperature`` in K, ``length`` in m; ``fractions`` is
+    ``(n_absorbing, *s)``, the soot volume fraction last when the tables have soot): the
+    amounts ``(*s, n_gas [+ 1])``, :math:`X_s \Delta s / T` (m/K; the table rows carry
+    :math:`\sigma p 10^{-4}/k_B`) and the soot's :math:`f_v \Delta s` (m); the offset
+    :math:`u \in [0, 1]` in the temperature interval ``(*s,)``; and the temperature ``(*s,)``
+    in K, which the exact Planck law takes.
     """
-    u = (temperature - tables.nodes[index]) * tables.inv_width[index]
-    powers = jnp.stack([u**3, u**2, u, jnp.ones_like(u)], axis=-1)
+    offset = (temperature - tables.nodes[index]) * tables.inv_width[index]
     gas = fractions[:-1] if tables.soot else fractions
     amount = gas * (length / temperature)
-    w_tau = jnp.moveaxis(amount[..., None] * powers, 0, -2)
-    w_tau = w_tau.reshape(w_tau.shape[:-2] + (-1,))
     if tables.soot:
-        w_tau = jnp.concatenate([w_tau, (fractions[-1] * length)[..., None]], axis=-1)
-    w_emit = powers if tables.planck == "table" else temperature[..., None]
-    return w_tau, w_emit
+        amount = jnp.concatenate([amount, (fractions[-1] * length)[None]])
+    return jnp.moveaxis(amount, 0, -1), offset, temperature
 
 
-def _spectra(tables: RTETables, index, w_tau, w_emit):
-    """Optical depth and Planck radiance (r, n_eta) of one segment of each ray of a batch.
+def _cubic(tables: RTETables, index, offset, row: int):
+    """Value and offset derivative (r, n_eta) of the cubic in table rows ``row … row + 3``.
 
-    One gather per table row: XLA fuses these into the elementwise sums.
+    One gather per row: XLA fuses them into the Horner sums.
     """
-    n_tau = w_tau.shape[-1]
-    tau = sum(w_tau[:, c, None] * tables.coef[index, c] for c in range(n_tau))
-    if tables.planck == "table":
-        emission = sum(w_emit[:, j, None] * tables.coef[index, n_tau + j] for j in range(4))
-    else:
-        emission = planck(tables.wavenumber, w_emit)
-    return tau, emission
+    c0, c1, c2, c3 = (tables.coef[index, row + j] for j in range(4))
+    u = offset[:, None]
+    return ((c0 * u + c1) * u + c2) * u + c3, (3 * c0 * u + 2 * c1) * u + c2
 
 
-def _spectra_cotangent(tables: RTETables, index, w_tau, w_emit, g_tau, g_emit):
-    """Cotangents of ``w_tau`` and ``w_emit`` from those of ``tau`` and ``B`` (r, n_eta).
+def _spectra(tables: RTETables, index, amount, offset, temperature):
+    r"""Spectra (r, n_eta) of one segment of each ray of a batch and their derivatives.
 
-    The sums over wavenumber are batched matrix-vector products.
+    Returns
+    -------
+    tau : optical depth (dimensionless).
+    rows : the spectra whose products with the amounts sum to ``tau``: per gas its
+        cross-section row (K/m), then the soot row (m⁻¹).
+    tau_offset : :math:`\partial\tau/\partial u` at fixed amounts.
+    emission : Planck radiance :math:`B` in W/(m²·sr·cm⁻¹).
+    emission_slope : :math:`\partial B/\partial u` (Planck table) or
+        :math:`\partial B/\partial T` (exact law, per K).
+
+    What a caller leaves unused, XLA does not compute.
     """
-    n_tau = w_tau.shape[-1]
-    contract = partial(jnp.einsum, "rn,rcn->rc", precision=jax.lax.Precision.HIGHEST)
-    d_tau = contract(g_tau, tables.coef[index, :n_tau])
+    n_gas = amount.shape[-1] - int(tables.soot)
+    rows, tau, tau_offset = [], 0.0, 0.0
+    for s in range(n_gas):
+        value, slope = _cubic(tables, index, offset, 4 * s)
+        rows.append(value)
+        tau = tau + amount[:, s, None] * value
+        tau_offset = tau_offset + amount[:, s, None] * slope
+    if tables.soot:
+        rows.append(tables.coef[index, 4 * n_gas])
+        tau = tau + amount[:, n_gas, None] * rows[-1]
     if tables.planck == "table":
-        d_emit = contract(g_emit, tables.coef[index, n_tau:])
+        emission, emission_slope = _cubic(tables, index, offset, amount.shape[-1] + 3 * n_gas)
     else:
-        slope = jax.jvp(partial(planck, tables.wavenumber), (w_emit,),
-                        (jnp.ones_like(w_emit),))[1]
-        d_emit = jnp.sum(g_emit * slope, axis=-1, keepdims=True)
-    return d_tau, d_emit
+        emission, emission_slope = jax.jvp(partial(planck, tables.wavenumber),
+                                           (temperature[:, None],),
+                                           (jnp.ones_like(temperature)[:, None],))
+    return tau, rows, tau_offset, emission, emission_slope
 
 
 @jax.custom_jvp
@@ -148,9 +161,9 @@ def _transmission(tau):
     t = jnp.exp(-tau)
     if tau.dtype == jnp.float64:
         return t, -jnp.expm1(-tau)
-    series = 1.0 - tau / 6.0
-    for n in (5.0, 4.0, 3.0, 2.0):
-        series = 1.0 - tau / n * series
+    series = 1.0 - tau * (1 / 6)
+    for n in (5, 4, 3, 2):  # multiplications by the reciprocals: no division per element
+        series = 1.0 - tau * (1 / n) * series
     return t, jnp.where(tau < 0.1, tau * series, 1.0 - t)
 
 
@@ -161,47 +174,65 @@ def _transmission_jvp(primals, tangents):
     return (t, a), (-t * dtau, t * dtau)
 
 
-def _sweep(tables: RTETables, index, w_tau, w_emit, n_segments, background):
+def _sweep(tables: RTETables, index, amount, offset, temperature, n_segments, background):
     """Radiance (r, n_eta) of one ray batch, from the far end of the rays to the camera.
 
     ``I ← t_k I + B_k (1 - t_k)`` for ``k = n_segments - 1, …, 0``, starting from the
     background (r, n_eta), or from zero when it is None: one array of state, one fused pass
     over the spectra per segment.
     """
-    if background is None:
-        background = jnp.zeros((index.shape[-1], tables.n_eta), tables.dtype)
-
     def step(j, radiance):
         k = n_segments - 1 - j
-        tau, emission = _spectra(tables, index[k], w_tau[k], w_emit[k])
+        tau, _, _, emission, _ = _spectra(tables, index[k], amount[k], offset[k],
+                                          temperature[k])
         transmittance, absorptance = _transmission(tau)
         return transmittance * radiance + emission * absorptance
 
+    if background is None:
+        background = jnp.zeros((index.shape[-1], tables.n_eta), tables.dtype)
     return jax.lax.fori_loop(0, n_segments, step, background)
 
 
-def _sweep_vjp(tables: RTETables, index, w_tau, w_emit, n_segments, radiance, cotangent):
-    """Cotangents of one batch's weights, camera side first, from ``∂I/∂τ_k`` and ``∂I/∂B_k``,
-    and of its background, ``cotangent · τ_ray`` (``radiance`` includes the background)."""
-    zeros = jnp.zeros_like(radiance)
+def _sweep_vjp(tables: RTETables, index, amount, offset, temperature, n_segments, radiance,
+               cotangent):
+    r"""Cotangents of one batch's weights, camera side first, and of its background.
+
+    With :math:`g_\tau = \bar I\,\partial I/\partial\tau_k` and
+    :math:`g_B = \bar I\,\partial I/\partial B_k` (module notes), per segment the sums
+    over wavenumber of :math:`g_\tau` times each row of ``tau`` give the amounts' cotangents,
+    and that of :math:`g_\tau\,\partial\tau/\partial u + g_B\,\partial B/\partial u`
+    the offset's (with the exact Planck law, :math:`g_B\,\partial B/\partial T` the
+    temperature's): ``n_gas + 1`` reductions of fused products (one more for soot, one more
+    with the exact Planck law), whatever the spline order.
+    The background's cotangent is ``cotangent · τ_ray`` (``radiance`` includes the
+    background).
+    """
+    n_tau = amount.shape[-1]
+    table = tables.planck == "table"
 
     def step(k, carry):
-        partial_sum, transmittance, d_w_tau, d_w_emit = carry
-        tau, emission = _spectra(tables, index[k], w_tau[k], w_emit[k])
+        partial_sum, transmittance, d_weights = carry
+        tau, rows, tau_offset, emission, emission_slope = _spectra(
+            tables, index[k], amount[k], offset[k], temperature[k])
         t, a = _transmission(tau)
         absorbed = transmittance * a
         partial_sum = partial_sum + emission * absorbed
         transmittance = transmittance * t
         g_tau = cotangent * (transmittance * emission - (radiance - partial_sum))
-        d_tau, d_emit = _spectra_cotangent(tables, index[k], w_tau[k], w_emit[k], g_tau,
-                                           cotangent * absorbed)
-        d_w_tau = jax.lax.dynamic_update_index_in_dim(d_w_tau, d_tau, k, 0)
-        d_w_emit = jax.lax.dynamic_update_index_in_dim(d_w_emit, d_emit, k, 0)
-        return partial_sum, transmittance, d_w_tau, d_w_emit
+        g_emit = cotangent * absorbed * emission_slope
+        sums = [g_tau * row for row in rows]
+        sums += [g_tau * tau_offset + g_emit] if table else [g_tau * tau_offset, g_emit]
+        d_segment = jnp.stack([jnp.sum(x, axis=-1) for x in sums], axis=-1)
+        d_weights = jax.lax.dynamic_update_index_in_dim(d_weights, d_segment, k, 0)
+        return partial_sum, transmittance, d_weights
 
-    init = (zeros, zeros + 1, jnp.zeros_like(w_tau), jnp.zeros_like(w_emit))
-    _, transmittance, d_w_tau, d_w_emit = jax.lax.fori_loop(0, n_segments, step, init)
-    return d_w_tau, d_w_emit, cotangent * transmittance
+    zeros = jnp.zeros_like(radiance)
+    n_sums = n_tau + (1 if table else 2)
+    init = (zeros, zeros + 1, jnp.zeros(amount.shape[:-1] + (n_sums,), amount.dtype))
+    _, transmittance, d_weights = jax.lax.fori_loop(0, n_segments, step, init)
+    d_temperature = jnp.zeros_like(temperature) if table else d_weights[..., n_tau + 1]
+    return ((d_weights[..., :n_tau], d_weights[..., n_tau], d_temperature),
+            cotangent * transmittance)
 
 
 def _batch_radiance(tables: RTETables, temperature, fractions, length, n_segments,
@@ -217,9 +248,9 @@ def _batch_cotangent(tables: RTETables, with_background: bool, temperature, frac
     index = _interval(tables, temperature)
     weights, to_fields = jax.vjp(partial(_segment_weights, tables, index),
                                  temperature, fractions, length)
-    d_w_tau, d_w_emit, d_background = _sweep_vjp(tables, index, *weights, n_segments, radiance,
-                                                 cotangent)
-    return to_fields((d_w_tau, d_w_emit)), d_background if with_background else None
+    d_weights, d_background = _sweep_vjp(tables, index, *weights, n_segments, radiance,
+                                         cotangent)
+    return to_fields(d_weights), d_background if with_background else None
 
 
 # -- all rays: batches mapped, the reverse sweep as custom VJP --------------------------------
@@ -227,10 +258,8 @@ def _radiance_impl(batch_rays, tables, fields, lengths, background=None):
     order, n_segments = ray_order(lengths, batch_rays)
     batches = batched_inputs(tables, fields, lengths, order, batch_rays)
     if background is not None:
-        batches = (*batches, n_segments, spectra_batches(background, order, batch_rays))
-    else:
-        batches = (*batches, n_segments)
-    out = jax.lax.map(lambda b: _batch_radiance(tables, *b), batches)
+        background = spectra_batches(background, order, batch_rays)
+    out = jax.lax.map(lambda b: _batch_radiance(tables, *b), (*batches, n_segments, background))
     return from_batches(out, order)
 
 

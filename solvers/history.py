@@ -58,6 +58,12 @@ class History:
         return f"<History: {len(self)} rows, columns {', '.join(self.keys())}>"
 
 
+CONVERGED = ("gtol:", "rtol_loss:", "rtol_x:", "converged:", "scipy L-BFGS-B: CONVERGENCE",
+             "scipy L-BFGS-B: STOP: PROJECTED GRADIENT IS SUFFICIENTLY SMALL")
+"""Beginnings of the stop reasons of a converged run: the stopping rules' tests
+(:mod:`solvers.stopping`), a solver's own test, SciPy L-BFGS-B's convergence messages."""
+
+
 @dataclass(repr=False)
 class Result:
     """What a solver run returns.
@@ -101,6 +107,12 @@ class Result:
     def loss(self) -> float:
         """Objective at :attr:`x` (last history row)."""
         return float(self.history["loss"][-1])
+
+    @property
+    def converged(self) -> bool:
+        """Whether the run stopped because a convergence test passed (:data:`CONVERGED`), not
+        at a limit, on a failed line search, a non-finite value or a callback's request."""
+        return self.stop_reason.startswith(CONVERGED)
 
     def __repr__(self) -> str:
         return f"<Result {self}>"

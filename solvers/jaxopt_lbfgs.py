@@ -83,7 +83,9 @@ class JaxoptLBFGS(Solver):
 
         def host(x):
             run = active["run"]
-            x = np.asarray(x, dtype=problem.dtype)
+            # jaxopt's trial points may lie a rounding error outside the box, where a forward
+            # model may refuse them (e.g. a mole fraction of -1e-14)
+            x = problem.project(np.asarray(x, dtype=problem.dtype))
             cache = run.scratch["cache"]
             ev = cache.get(x) or cache.put(x, run.evaluate(x))
             return np.asarray(ev.loss, problem.dtype), np.asarray(ev.grad, problem.dtype)

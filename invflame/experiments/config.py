@@ -1,9 +1,10 @@
-r"""Experiment configuration: one schema that validates a TOML file and documents every key.
+r"""Experiment configuration: validate and load a TOML file against one schema.
 
-A configuration describes one reconstruction: the ground truth, the grid, the camera rig, the
-spectral window, the instrument, measurement noise, the representation, the regularizer, the
-solver and its options, the initialization and the seed. :data:`SCHEMA` holds, for every key,
-its type, default, unit, allowed values or range and a one-line meaning. From it come
+A configuration describes one reconstruction: the ground truth, the grid (its box and cells),
+the camera rig, the spectral window, the instrument, measurement noise, the representation,
+soot, the regularizer, the solver and its options, the initialization and the seed.
+:data:`SCHEMA` holds, for every key, its type, default, unit, allowed values or range and a
+one-line meaning. From it come
 
 - :func:`validate`: a file states only what it changes; an unknown key, a value of the wrong
   type, outside its allowed values or range is refused with a :class:`ConfigError` naming the
@@ -12,8 +13,14 @@ its type, default, unit, allowed values or range and a one-line meaning. From it
 - :func:`dumps_commented`, TOML with a comment per key (``invflame config --show-defaults``);
 - :func:`keys_markdown`, the key tables of ``docs/guide/configuration.md``.
 
-Conditions between keys (the window and the instrument, the data and the truth, the rig and
-the grid, ``solver.options`` and the solver) are checked after the keys, each by one function.
+Conditions between keys (the window and the instrument, the data and the truth, the grid's
+corners and cells, the rig and the grid, soot and the representation, ``solver.options`` and
+the solver) are checked after the keys, each by one function.
+
+This module validates and loads; the schema is declared in
+:mod:`invflame.experiments.config_schema` and configurations are written as text by
+:mod:`invflame.experiments.config_text`. Their public names are re-exported here (see
+``__all__``): ``config.SCHEMA`` and ``config.dumps`` are the same objects as theirs.
 """
 
 from __future__ import annotations
@@ -23,316 +30,44 @@ import difflib
 import math
 import tomllib
 import warnings
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
-import tomli_w
 
 from invflame.errors import ConfigError
+from invflame.experiments.config_schema import (
+    CHOICES,
+    DEFAULTS,
+    NON_NEGATIVE,
+    POSITIVE,
+    RENAMED_KEYS,
+    RENAMED_VALUES,
+    SCHEMA,
+    Key,
+    Rule,
+    Section,
+    ValueType,
+    _defaults,
+    _is_number,
+    allowed,
+    keys,
+    numbers,
+)
+from invflame.experiments.config_text import (
+    COMMENT_COLUMN,
+    _literal,
+    dumps,
+    dumps_commented,
+    keys_markdown,
+)
 
+__all__ = [  # in the order of the reference: the schema, validation and loading, text
+    "ValueType", "numbers", "Rule", "Key", "Section", "SCHEMA", "keys", "DEFAULTS", "CHOICES",
+    "POSITIVE", "NON_NEGATIVE", "RENAMED_KEYS", "RENAMED_VALUES", "LINE_DATA_RANGE", "allowed",
+    "validate", "line_by_line_grid", "output_grid", "reconstruction_grid", "rig_spec", "load",
+    "dumps", "COMMENT_COLUMN", "dumps_commented", "keys_markdown",
+]
 
-def _is_number(value) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool)
-
-
-@dataclass(frozen=True)
-class ValueType:
-    """The kind of value a key holds.
-
-    Attributes
-    ----------
-    name : str
-        What a value must be, in messages (``{path}`` stands for the key).
-    accepts : callable
-        True for a value of this type as read from TOML.
-    convert : callable or None
-        The value as stored (integers given for a number become floats); None: as given.
-    noun : str
-        ``"integer"`` or ``"number"`` for types whose values have a range; empty otherwise.
-    """
-
-    name: str
-    accepts: Callable[[Any], bool]
-    convert: Callable[[Any], Any] | None = None
-    noun: str = ""
-
-
-INTEGER = ValueType("an integer", lambda v: isinstance(v, int) and not isinstance(v, bool),
-                    int, "integer")
-NUMBER = ValueType("a number", _is_number, float, "number")
-BOOLEAN = ValueType("true or false", lambda v: isinstance(v, bool))
-STRING = ValueType("a string", lambda v: isinstance(v, str))
-NUMBER_OR_STRING = ValueType("a number or a string",
-                             lambda v: _is_number(v) or isinstance(v, str),
-                             lambda v: v if isinstance(v, str) else float(v), "number")
-TABLE = ValueType("a table such as {{ lr = 0.01 }}", lambda v: isinstance(v, dict))
-TABLES = ValueType("[[{path}]] tables",
-                   lambda v: isinstance(v, list) and all(isinstance(t, dict) for t in v))
-
-
-def numbers(n: int) -> ValueType:
-    """The type of a list of ``n`` numbers, stored as floats.
-
-    Parameters
-    ----------
-    n : int
-        How many numbers the list holds.
-
-    Returns
-    -------
-    ValueType
-        Accepting exactly ``n`` integers or floats (not booleans).
-    """
-    return ValueType(f"a list of {n} numbers",
-                     lambda v: isinstance(v, list) and len(v) == n and all(map(_is_number, v)),
-                     lambda v: [float(x) for x in v])
-
-
-@dataclass(frozen=True)
-class Rule:
-    """A condition on a value that a range cannot state, and its wording (``"a perfect
-    square ..."``, completing "must be")."""
-
-    holds: Callable[[Any], bool]
-    text: str
-
-
-SQUARE = Rule(lambda n: round(n ** 0.5) ** 2 == n,
-              "a perfect square k*k (k x k sub-rays per pixel: 1, 4, 9, 16, 25, ...)")
-AMBIENT = Rule(lambda a: 150.0 < a[0] < 500.0 and all(0.0 <= x <= 1.0 for x in a[1:])
-               and sum(a[1:]) < 1.0,
-               "[T in K (150-500), X_CO2, X_H2O, X_CH4] with mole fractions in [0, 1] summing "
-               "below 1")
-LOW_HIGH = Rule(lambda r: 0.0 < r[0] < r[1], "[low, high] with 0 < low < high")
-
-
-@dataclass(frozen=True)
-class Key:
-    """One configuration key.
-
-    Attributes
-    ----------
-    type : ValueType
-        What the value is.
-    default : object
-        The value when a file does not state it.
-    meaning : str
-        One line: what the key sets.
-    unit : str
-        Unit of the numbers (empty for counts and dimensionless values).
-    choices : tuple of str
-        The strings allowed (for a number-or-string key: the words allowed besides numbers);
-        empty when any string is (a path, a name checked elsewhere).
-    low, high : float or None
-        Smallest and largest number allowed (None: unbounded).
-    above : bool
-        True: numbers must be above ``low``, not equal to it.
-    rule : Rule or None
-        A further condition (a perfect square, a list's entries).
-    why : str
-        Said after the range: what is counted, or why it is bounded.
-    """
-
-    type: ValueType
-    default: Any
-    meaning: str
-    unit: str = ""
-    choices: tuple[str, ...] = ()
-    low: float | None = None
-    high: float | None = None
-    above: bool = False
-    rule: Rule | None = None
-    why: str = ""
-
-
-@dataclass(frozen=True)
-class Section:
-    """A table of keys, ``[name]`` in the file, with a few words on what it sets."""
-
-    title: str
-    keys: dict[str, Key]
-
-
-def _positive(type_: ValueType, default, meaning: str, unit: str = "", **more) -> Key:
-    return Key(type_, default, meaning, unit, low=0.0, above=True, **more)
-
-
-SCHEMA: dict[str, Key | Section] = {
-    "seed": Key(INTEGER, 0, "seed of the noise, the networks' initial weights and the noisy "
-                "start; a run records it", low=0.0),
-    "truth": Section("the flame", {
-        "source": Key(STRING, "poolfire", "ground truth: 'poolfire' (the packaged OpenFOAM pool "
-                      "fire), 'synthetic' (an analytic plume), 'none' (measured data only) or "
-                      "the path of a field .npz"),
-        "grid": Key(INTEGER, 30, "voxels per axis of the reconstruction grid (the truth is "
-                    "resampled onto it for scoring)", low=4.0,
-                    why="voxels per axis (the regularizers and metrics need neighbours)"),
-        "soot": Key(NUMBER, 0.0, "peak soot volume fraction of a soot layer in the truth's hot "
-                    "fuel (invflame.phantoms.plume.plume_soot), seen in the synthetic data; "
-                    "the reconstruction models gas only; 0: soot-free", low=0.0, high=1e-3,
-                    why="(flames hold at most ppm)"),
-    }),
-    "rig": Section("the cameras", {
-        "pixels": _positive(INTEGER, 32, "pixels per side of each of the four cameras"),
-        "distance": _positive(NUMBER, 1.5, "distance of the cameras from the grid's centre, at "
-                              "± on the two horizontal axes", "m"),
-        "focal_length": _positive(NUMBER, 0.59, "pinhole focal length", "m"),
-        "rays_per_pixel": _positive(INTEGER, 9, "sub-rays per pixel of the reconstruction, k × k "
-                                    "averaged into the pixel (9: every voxel seen)", rule=SQUARE),
-        "file": Key(STRING, "", "a rig file (TOML, one [[cameras]] table per camera, see "
-                    "invflame.geometry.rig_file) or preset ('paper'); replaces pixels, distance "
-                    "and focal_length"),
-        "cameras": Key(TABLES, [], "the same camera records inline, as [[rig.cameras]] tables "
-                       "(not with rig.file)"),
-    }),
-    "spectrum": Section("the line-by-line window", {
-        "min": Key(NUMBER, 650.0, "lower end of the window, below spectrum.max", "cm⁻¹"),
-        "max": Key(NUMBER, 725.0, "upper end of the window", "cm⁻¹"),
-        "step": _positive(NUMBER, 0.04, "step of the line-by-line grid, at most half of "
-                          "instrument.resolution", "cm⁻¹"),
-        "pressure": _positive(NUMBER, 101325.0, "total pressure of the gas", "Pa"),
-    }),
-    "instrument": Section("the FTIR spectrometer", {
-        "resolution": _positive(NUMBER, 8.0, "resolution 1/L (L the maximum optical path "
-                                "difference), triangular apodization", "cm⁻¹"),
-        "sampling": _positive(NUMBER, 2.0, "spacing of the output spectrum", "cm⁻¹"),
-    }),
-    "data": Section("the measurement: a file, or how the synthetic one is made", {
-        "source": Key(STRING, "", "a measurement file (.nc, see invflame.measurement_file) to "
-                      "reconstruct instead of simulating; without truth.source the run has no "
-                      "ground truth"),
-        "inverse_crime": Key(BOOLEAN, False, "true: data from the reconstruction's own grid, "
-                             "rays and step (the paper's protocol); false: from the truth's "
-                             "native grid, more sub-rays and a finer step"),
-        "rays_per_pixel": _positive(INTEGER, 25, "sub-rays per pixel of the synthetic "
-                                    "measurement", rule=SQUARE),
-        "step_divisor": _positive(INTEGER, 2, "the synthetic measurement's line-by-line step is "
-                                  "spectrum.step / step_divisor"),
-    }),
-    "noise": Section("measurement noise", {
-        "kind": Key(STRING, "nesr", "'nesr': a noise-equivalent spectral radiance; 'snr': a "
-                    "peak signal-to-noise ratio; 'none': noise-free data",
-                    choices=("nesr", "snr", "none")),
-        "nesr": _positive(NUMBER_OR_STRING, 1e-3, "noise standard deviation per spectral "
-                          "sample, or the path of a file of (wavenumber, NESR) rows",
-                          "W/(m²·sr·cm⁻¹)"),
-        "snr": _positive(NUMBER, 100.0, "for kind 'snr': the largest clean radiance over the "
-                         "noise standard deviation"),
-    }),
-    "background": Section("what the cameras see behind the flame", {
-        "kind": Key(STRING, "none", "'none': a cold black background; 'blackbody': a grey wall "
-                    "of background.temperature and background.emissivity; 'file': measured "
-                    "spectra per camera from background.file (see invflame.background)",
-                    choices=("none", "blackbody", "file")),
-        "temperature": _positive(NUMBER, 300.0, "'blackbody': the wall's temperature", "K"),
-        "emissivity": Key(NUMBER, 1.0, "'blackbody': the wall's emissivity", low=0.0,
-                          high=1.0, above=True),
-        "file": Key(STRING, "", "'file': a NetCDF file of background spectra (a variable "
-                    "'background' (camera, wavenumber) in W/(m2 sr cm-1), or a measurement file "
-                    "of a frame without the flame)"),
-    }),
-    "representation": Section("what the solver optimizes", {
-        "kind": Key(STRING, "voxel", "'voxel': values per voxel; 'neural-field': a NeRF-like "
-                    "field rendered along the rays; 'neural-centres': a network evaluated at the "
-                    "voxel centres", choices=("voxel", "neural-field", "neural-centres")),
-        "frequencies": _positive(INTEGER, 10, "networks: frequencies of the positional encoding "
-                                 "of each coordinate"),
-        "hidden": _positive(INTEGER, 64, "networks: units per hidden layer"),
-        "depth": _positive(INTEGER, 4, "networks: number of hidden layers (formerly 'layers', "
-                           "still read with a warning)"),
-        "coarse_samples": _positive(INTEGER, 32, "'neural-field': stratified samples per "
-                                    "sub-ray"),
-        "fine_samples": _positive(INTEGER, 32, "'neural-field': importance samples per sub-ray, "
-                                  "drawn from the weights of the coarse pass"),
-        "rays_per_batch": _positive(INTEGER, 1024, "'neural-field': pixels per solver iteration "
-                                    "(a stochastic objective)"),
-        "pretrain_iterations": Key(INTEGER, 1000, "networks: iterations fitting the networks to "
-                                   "the starting fields before the reconstruction", low=0.0),
-    }),
-    "regularizer": Section("the penalty Φ and its weight λ", {
-        "kind": Key(STRING, "none", "'tikhonov': mean squared gradient; 'tv': mean absolute "
-                    "gradient (anisotropic total variation) of the normalized fields",
-                    choices=("none", "tikhonov", "tv")),
-        "lambda": Key(NUMBER_OR_STRING, 1e-3, "the weight λ of Φ, or 'discrepancy' to "
-                      "choose it from the data", "1/Φ", choices=("discrepancy",), low=0.0),
-        "scaling": Key(STRING, "chi2", "'chi2': minimize χ²/M + λΦ (noise-weighted "
-                       "misfit); 'paper': the unweighted misfit per pixel + λΦ",
-                       choices=("chi2", "paper")),
-        "lambda_range": Key(numbers(2), [1e-3, 1e2], "the range 'discrepancy' searches", "1/Φ",
-                            rule=LOW_HIGH),
-        "tau": Key(NUMBER, 1.0, "'discrepancy' takes the largest λ with χ² ≤ τM",
-                   low=1.0),
-    }),
-    "solver": Section("the optimizer and its stopping rules", {
-        "name": Key(STRING, "adam", "a solver's name from solvers.available() (gd, adam, "
-                    "gauss-newton, pdhg, lbfgs, ...)"),
-        "iterations": _positive(INTEGER, 200, "the most iterations; stopping rules in options "
-                                "may end sooner"),
-        "options": Key(TABLE, {}, "the solver's own options and stopping rules (lr, rtol_loss, "
-                       "loss_window, rtol_x, gtol, time_budget, ...), see solvers.solve"),
-    }),
-    "init": Section("the start", {
-        "kind": Key(STRING, "band-tomography", "'band-tomography': from the data (band-"
-                    "integrated linear tomography and a methane state relation); 'ambient': "
-                    "flat ambient air; 'noisy-truth': the paper's truth plus noise",
-                    choices=("band-tomography", "ambient", "noisy-truth")),
-        "noise": Key(NUMBER, 0.2, "'noisy-truth': standard deviation of the noise",
-                     "fraction of each field's range", low=0.0, high=1.0,
-                     why="(the paper's 0.2)"),
-        "temperature_rise": _positive(NUMBER, 1500.0, "'band-tomography': flame-sheet "
-                                      "temperature rise of the state relation", "K"),
-        "ambient": Key(numbers(4), [300.0, 0.0, 0.0, 0.0], "the air around the flame: "
-                       "[T, X_CO2, X_H2O, X_CH4]", "K, mol/mol", rule=AMBIENT),
-    }),
-}
-"""Every key of a configuration: top-level keys and ``[section]`` tables, in file order."""
-
-
-def keys(schema: dict[str, Key | Section] = SCHEMA) -> Iterator[tuple[str, str, Key]]:
-    """Every key of a schema, in file order.
-
-    Parameters
-    ----------
-    schema : dict, optional
-        Top-level keys and sections; :data:`SCHEMA` if not given.
-
-    Yields
-    ------
-    tuple of (str, str, Key)
-        ``(section, name, key)``, ``section`` empty for a top-level key.
-    """
-    for name, entry in schema.items():
-        if isinstance(entry, Section):
-            yield from ((name, key_name, key) for key_name, key in entry.keys.items())
-        else:
-            yield "", name, entry
-
-
-def _defaults(schema: dict[str, Key | Section]) -> dict[str, Any]:
-    return {name: _defaults(entry.keys) if isinstance(entry, Section)
-            else copy.deepcopy(entry.default) for name, entry in schema.items()}
-
-
-DEFAULTS: dict[str, Any] = _defaults(SCHEMA)
-"""The complete default configuration, from :data:`SCHEMA`."""
-CHOICES = {(section, name): key.choices for section, name, key in keys() if key.choices}
-"""The strings allowed for ``(section, key)``, from :data:`SCHEMA`."""
-POSITIVE = {(section, name) for section, name, key in keys()
-            if section and key.low is not None and (key.low > 0 or key.above)}
-"""``(section, key)`` of the numbers that must be positive, from :data:`SCHEMA`."""
-NON_NEGATIVE = {(section, name) for section, name, key in keys()
-                if section and key.low == 0 and not key.above}
-"""``(section, key)`` of the numbers that may be zero but not negative, from :data:`SCHEMA`."""
-
-RENAMED_KEYS = {("representation", "layers"): "depth"}
-"""Former key names, still read (with a FutureWarning): (section, old key) → new key."""
-RENAMED_VALUES = {("representation", "kind"): {"neural": "neural-field"}}
-"""Former values, still read (with a FutureWarning): (section, key) → {old: new}."""
-
-"""Stopping rules a solver takes beside its algorithm options (``solver.options``)."""
 LINE_DATA_RANGE = (600.0, 800.0)
 """cm⁻¹ covered by the built-in line lists (packaged H2O, generated CO2)."""
 
@@ -340,48 +75,6 @@ LINE_DATA_RANGE = (600.0, 800.0)
 def _did_you_mean(word: str, candidates) -> str:
     close = difflib.get_close_matches(word, list(candidates), n=1)
     return f" (did you mean {close[0]!r}?)" if close else ""
-
-
-def _words(choices) -> str:
-    quoted = [repr(c) for c in choices]
-    return quoted[0] if len(quoted) == 1 else f"{', '.join(quoted[:-1])} or {quoted[-1]}"
-
-
-def _range(key: Key) -> str:
-    """The range of a number key in words, completing "must be"."""
-    if key.high is not None:
-        return f"in {'(' if key.above else '['}{key.low:g}, {key.high:g}]"
-    if key.low == 0:
-        return f"a {'positive' if key.above else 'non-negative'} {key.type.noun}"
-    return f"{'above' if key.above else 'at least'} {key.low:g}"
-
-
-def allowed(key: Key, path: str) -> str:
-    """What ``key`` accepts, in words completing "must be" (``"a positive number"``, ``"'nesr',
-    'snr' or 'none'"``, ``"at least 4 voxels per axis (...)"``).
-
-    Parameters
-    ----------
-    key : Key
-        An entry of :data:`SCHEMA`.
-    path : str
-        Its name in the file (``"rig.cameras"``), for the types that name it.
-
-    Returns
-    -------
-    str
-        Its type, range with the reason, rule, and the strings allowed.
-    """
-    if key.type is STRING and key.choices:
-        return _words(key.choices)
-    if key.low is None and key.high is None:
-        text = key.rule.text if key.rule else key.type.name.format(path=path)
-    else:
-        text = " ".join(filter(None, (_range(key), key.why)))
-        text += f", {key.rule.text}" if key.rule else ""
-    if key.type is NUMBER_OR_STRING:
-        text += f" or {_words(key.choices) if key.choices else 'a string'}"
-    return text
 
 
 def _key_error(path: str, key: Key, problem: str) -> ConfigError:
@@ -485,6 +178,8 @@ def validate(config: dict) -> dict:
     """
     full = _merge(SCHEMA, _renamed(config), "")
     _check_sources(config, full)
+    _check_grid(config, full)
+    _check_soot(full)
     _check_regularizer(full["regularizer"])
     _check_background(full["background"])
     _check_spectrum(full)
@@ -590,6 +285,54 @@ def _check_sources(raw: dict, full: dict) -> None:
                           "place")
 
 
+def _check_grid(raw: dict, full: dict) -> None:
+    grid = full["grid"]
+    lower, upper = grid["lower"], grid["upper"]
+    if not all(lo < hi for lo, hi in zip(lower, upper, strict=True)):
+        raise ConfigError(f"'grid.upper' = {upper!r} m must exceed 'grid.lower' = {lower!r} m on "
+                          "every axis (x, y, z): swap the corners or widen the box")
+    stated = raw.get("truth", {}) if isinstance(raw.get("truth"), dict) else {}
+    if grid["cells"] and "grid" in stated:
+        raise ConfigError("both 'truth.grid' and 'grid.cells' give the voxels of the "
+                          "reconstruction grid: give them in one place ('grid.cells' for "
+                          "[nx, ny, nz])")
+
+
+def reconstruction_grid(cfg: dict):
+    """The reconstruction grid of a configuration: the box ``grid.lower``..``grid.upper``
+    (m, y up) with ``grid.cells`` voxels, or ``truth.grid`` on every axis.
+
+    Parameters
+    ----------
+    cfg : dict
+        Validated configuration.
+
+    Returns
+    -------
+    invflame.geometry.VoxelGrid
+    """
+    from invflame.geometry import VoxelGrid
+
+    grid = cfg["grid"]
+    cells = tuple(grid["cells"]) or (cfg["truth"]["grid"],) * 3
+    return VoxelGrid(grid["lower"], grid["upper"], cells, up_axis=1)
+
+
+def _check_soot(full: dict) -> None:
+    soot, truth = full["soot"], full["truth"]
+    if not soot["reconstruct"]:
+        return
+    kind = full["representation"]["kind"]
+    if kind != "voxel":
+        raise ConfigError(f"'soot.reconstruct' = true needs 'representation.kind' = 'voxel' (the "
+                          f"networks render gas only), got {kind!r}: use the voxel "
+                          "representation or set reconstruct = false")
+    if truth["soot"] > soot["max"]:
+        raise ConfigError(f"'truth.soot' = {truth['soot']!r} exceeds 'soot.max' = "
+                          f"{soot['max']!r}, the bound of the reconstructed soot volume "
+                          "fraction: raise soot.max to at least truth.soot")
+
+
 def rig_spec(cfg: dict):
     """The cameras of ``rig.file`` or ``rig.cameras`` as a
     :class:`invflame.geometry.rig_file.RigSpec`; None for the paper's rig
@@ -604,11 +347,11 @@ def rig_spec(cfg: dict):
 
 def _check_rig(full: dict) -> None:
     from invflame.errors import GeometryError, InputDataError
-    from invflame.geometry import VoxelGrid, paper_rig
+    from invflame.geometry import paper_rig
     from invflame.geometry.rig_file import check_rig_sees_grid
 
     rig = full["rig"]
-    grid = VoxelGrid.poolfire(full["truth"]["grid"])
+    grid = reconstruction_grid(full)
     where = f"'rig.file' = {rig['file']!r}" if rig["file"] else "'rig.cameras'"
     try:
         spec = rig_spec(full)
@@ -689,101 +432,3 @@ def load(path) -> dict:
     except ConfigError as err:
         raise ConfigError(f"{path}: {err}") from err
 
-
-def dumps(config: dict) -> str:
-    """Write a configuration as TOML text that :func:`load` reads back to the same values.
-
-    Parameters
-    ----------
-    config : dict
-        Configuration (e.g. from :func:`validate`): top-level keys, then one table per section.
-
-    Returns
-    -------
-    str
-        TOML text written by ``tomli_w``.
-
-    Raises
-    ------
-    TypeError
-        If a value has no TOML form (e.g. None), naming its type.
-    """
-    return tomli_w.dumps(config)
-
-
-def _literal(value) -> str:
-    """``value`` as a one-line TOML literal (arrays and tables inline)."""
-    if isinstance(value, list):
-        return "[" + ", ".join(map(_literal, value)) + "]"
-    if isinstance(value, dict):
-        return "{" + ", ".join(f"{_literal_key(k)} = {_literal(v)}" for k, v in value.items()) + "}"
-    return tomli_w.dumps({"v": value}).removeprefix("v = ").rstrip("\n")
-
-
-def _literal_key(name: str) -> str:
-    return tomli_w.dumps({name: 0}).rsplit(" = ", 1)[0]
-
-
-def _groups() -> Iterator[tuple[str, str, dict[str, Key]]]:
-    """The keys of :data:`SCHEMA` by table: ``(section, title, keys)``, the top level first
-    (section and title empty)."""
-    yield "", "", {name: key for section, name, key in keys() if not section}
-    for name, entry in SCHEMA.items():
-        if isinstance(entry, Section):
-            yield name, entry.title, entry.keys
-
-
-COMMENT_COLUMN = 40
-"""Comments of :func:`dumps_commented` line up after values up to this many characters."""
-
-
-def dumps_commented(config: dict = DEFAULTS) -> str:
-    """A complete configuration as TOML with a comment per key: its unit, meaning and what is
-    allowed (``invflame config --show-defaults``); :func:`load` reads it back.
-
-    Parameters
-    ----------
-    config : dict, optional
-        A validated configuration (every key of :data:`SCHEMA`); the defaults if not given.
-
-    Returns
-    -------
-    str
-        TOML text: top-level keys, then one ``[section]`` per table of :data:`SCHEMA`, a key
-        per line with its comment aligned after the value.
-    """
-    blocks = []
-    for section, title, group in _groups():
-        values = config[section] if section else config
-        lines = [f"{name} = {_literal(values[name])}" for name in group]
-        width = max((len(line) for line in lines if len(line) <= COMMENT_COLUMN), default=0)
-        block = [f"[{section}]  # {title}"] if section else []
-        for line, (name, key) in zip(lines, group.items(), strict=True):
-            unit = f"[{key.unit}] " if key.unit else ""
-            path = f"{section}.{name}" if section else name
-            block.append(f"{line:<{width}}  # {unit}{key.meaning}; allowed: "
-                         f"{allowed(key, path)}")
-        blocks.append("\n".join(block))
-    return ("# invflame configuration; after each key: [unit] meaning; allowed: values\n"
-            + "\n\n".join(blocks) + "\n")
-
-
-def keys_markdown() -> str:
-    """The keys of :data:`SCHEMA` as Markdown tables, one per section (key, default, unit,
-    allowed values, meaning): the reference in ``docs/guide/configuration.md``.
-
-    Returns
-    -------
-    str
-        A ``###`` heading and a table per section, the top-level keys first.
-    """
-    out = []
-    for section, title, group in _groups():
-        out += [f"### `[{section}]`: {title}" if section else "### Top level", "",
-                "| key | default | unit | allowed | meaning |", "|---|---|---|---|---|"]
-        for name, key in group.items():
-            path = f"{section}.{name}" if section else name
-            out.append(f"| `{path}` | `{_literal(key.default)}` | {key.unit or '—'} | "
-                       f"{allowed(key, path)} | {key.meaning} |")
-        out.append("")
-    return "\n".join(out)

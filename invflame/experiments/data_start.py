@@ -40,6 +40,11 @@ at the CO₂ ν₂ Q branch (667 cm⁻¹) in gas of a few hundred kelvin.
 as short as the brightest pixel allows, still emits at least :data:`THIN_RATIO` of its thin
 limit.
 
+**Masked values.** A bad wavenumber (masked in every pixel) leaves the channels; a pixel
+whose band then lacks a value, a bad pixel, contributes no row to the linear system:
+:math:`b`, :math:`A` and :math:`\sigma_b` keep only the pixels measured in every channel
+used, and :math:`M` counts those.
+
 **2. State relation.** Burke–Schumann methane–air combustion
 (:func:`invflame.phantoms.composition.burke_schumann_methane`) on its lean branch, mixture
 fraction from 0 (ambient air, carrying its humidity and CO₂) to stoichiometric, gives
@@ -59,7 +64,7 @@ import scipy.sparse
 
 import operators as op
 import solvers
-from invflame.experiments.initialization import AMBIENT
+from invflame.experiments.initialization import AMBIENT, with_soot_field
 from invflame.phantoms.composition import (
     AIR_O2_MOLE_FRACTION,
     MOLAR_MASS,
@@ -446,7 +451,7 @@ def band_tomography(lengths, band, grid, sigma_band=None, smoothing=None,
 def band_tomography_start(scene, data, sigma=None,
                           temperature_rise_st: float = DEFAULT_TEMPERATURE_RISE_ST, *,
                           ambient=AMBIENT, channels=None, smoothing=None,
-                          n_states: int = 257) -> np.ndarray:
+                          n_states: int = 257, measured=None) -> np.ndarray:
     """Starting fields from the measurements alone: band tomography, then a state relation.
 
     See the module docstring for the method; nothing of the truth is used.
@@ -460,9 +465,9 @@ def band_tomography_start(scene, data, sigma=None,
         Measured spectra in W/(m²·sr·cm⁻¹).
     sigma : float or array_like, optional
         Noise standard deviation of ``data`` in W/(m²·sr·cm⁻¹): a scalar, one value per
-        output wavenumber, or one per value; independent between values. Given, the
-        smoothing follows the discrepancy principle; None (noise unknown): the fixed
-        :data:`DEFAULT_SMOOTHING`.
+        output wavenumber, or one per value; independent between values; ``inf`` for a
+        masked value. Given, the smoothing follows the discrepancy principle; None (noise
+        unknown): the fixed :data:`DEFAULT_SMOOTHING`.
     temperature_rise_st : float, optional
         Temperature rise in K at stoichiometry of the state relation (default
         :data:`DEFAULT_TEMPERATURE_RISE_ST`); ``ambient[0] + temperature_rise_st`` must lie
@@ -478,12 +483,16 @@ def band_tomography_start(scene, data, sigma=None,
         rules above.
     n_states : int, optional
         States tabulated along the state relation (≥ 2).
+    measured : array_like of bool, shape ``scene.data_shape``, optional
+        False for a masked value (a bad pixel or wavenumber; see the module notes); default:
+        where ``sigma`` is finite (everything without ``sigma``).
 
     Returns
     -------
-    ndarray, shape ``scene.field_shape`` = (4, nx, ny, nz)
+    ndarray, shape (4, nx, ny, nz)
         T in K and mole fractions of CO2, H2O, CH4 (float64); voxels without emission beyond
-        ambient air hold the ambient air.
+        ambient air hold the ambient air. A scene that reconstructs soot starts from these
+        and no soot (:func:`~invflame.experiments.initialization.with_soot_field`).
     """
     data = np.asarray(data, np.float64)
     if data.shape != tuple(scene.data_shape):
@@ -491,16 +500,26 @@ def band_tomography_start(scene, data, sigma=None,
                          f"output wavenumbers), got {data.shape}")
     if not np.all(np.isfinite(data)):
         raise ValueError("data contains NaN or infinite values")
-    noise = None if sigma is None else 1.0 / noise_weights(sigma, data.shape)
+    with np.errstate(divide="ignore"):  # a masked value's weight 0: noise inf
+        noise = None if sigma is None else 1.0 / noise_weights(sigma, data.shape)
+    measured = _measured_values(data.shape, noise, measured)
     _, states = lean_branch(temperature_rise_st, ambient, n_states)
-    air = np.broadcast_to(states[:, :1, None, None], scene.field_shape)
-    excess = data - np.asarray(scene.simulate(air), np.float64)  # beyond ambient air
+    air = with_soot_field(np.broadcast_to(states[:, :1, None, None], (4, *scene.grid.shape)),
+                          scene.field_shape[0] == 5)  # soot-free air
+    excess = np.where(measured, data - np.asarray(scene.simulate(air), np.float64), 0.0)
+    somewhere = measured.any(axis=0)  # a wavenumber masked in every pixel leaves the band
     if channels is None:
-        channels = thin_channels(scene, float(np.max(excess @ channel_weights(scene))), states)
-    weights = channel_weights(scene, channels)
-    band = excess @ weights  # W/(m² sr)
-    sigma_band = None if noise is None else np.sqrt(noise**2 @ weights**2)
-    tomography = band_tomography(pixel_path_lengths(scene), band, scene.grid, sigma_band,
+        peak = float(np.max(excess @ (channel_weights(scene) * somewhere)))
+        channels = thin_channels(scene, peak, states)
+    weights = channel_weights(scene, channels) * somewhere
+    rows = measured[:, weights > 0].all(axis=1)  # a pixel lacking a channel gives no row
+    if not (weights.any() and rows.any()):
+        raise ValueError("the mask leaves no pixel measured in every channel of the band "
+                         "integral: no row for the band tomography")
+    band = excess[rows] @ weights  # W/(m² sr)
+    sigma_band = None if noise is None else np.sqrt(
+        np.where(measured, noise, 0.0)[rows]**2 @ weights**2)
+    tomography = band_tomography(pixel_path_lengths(scene)[rows], band, scene.grid, sigma_band,
                                  smoothing)
     density = channel_emission(scene, states) @ weights
     density = density - density[0]  # beyond ambient air, W/(m³ sr)
@@ -511,4 +530,16 @@ def band_tomography_start(scene, data, sigma=None,
     index = np.arange(density.size)
     position = np.interp(tomography.emission.ravel(), density, index)
     fields = np.stack([np.interp(position, index, field) for field in states])
-    return fields.reshape(scene.field_shape)
+    return fields.reshape((4, *scene.grid.shape))
+
+
+def _measured_values(shape, noise, measured) -> np.ndarray:
+    """Where the data were measured, ``shape``: ``measured`` if given, else where the noise
+    (W/(m²·sr·cm⁻¹)) is finite, else everywhere."""
+    if measured is None:
+        return np.ones(shape, bool) if noise is None else np.isfinite(noise)
+    measured = np.asarray(measured)
+    if measured.shape != shape or measured.dtype != bool:
+        raise ValueError(f"measured must be a boolean mask of the data's shape {shape}, got "
+                         f"dtype {measured.dtype} and shape {measured.shape}")
+    return measured

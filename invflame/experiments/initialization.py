@@ -1,4 +1,5 @@
-"""Starting fields that need no data: ambient air, and the paper's noisy truth."""
+"""Starting fields that need no data: ambient air, and the paper's noisy truth; and the soot
+field a start holds when soot is reconstructed."""
 
 from __future__ import annotations
 
@@ -43,6 +44,25 @@ def noisy_truth(truth: np.ndarray, noise: float, seed: int,
     start[0] = np.clip(start[0], *temperature_range)
     start[1:] = np.clip(start[1:], 0.0, 1.0)
     return start.astype(truth.dtype)
+
+
+def with_soot_field(fields: np.ndarray, soot: bool) -> np.ndarray:
+    """Starting fields with or without the soot volume fraction as a fifth field.
+
+    Parameters
+    ----------
+    fields : ndarray, shape (4, nx, ny, nz) or (5, nx, ny, nz)
+        T in K and mole fractions of CO2, H2O, CH4, optionally then the soot volume fraction.
+    soot : bool
+        True: five fields, a soot-free start gaining f_v = 0 (no soot until the data ask for
+        it); False: the four gas fields.
+    """
+    fields = np.asarray(fields)
+    if not soot:
+        return fields[:4]
+    if len(fields) == 5:
+        return fields
+    return np.concatenate([fields, np.zeros((1, *fields.shape[1:]), fields.dtype)])
 
 
 def ambient(shape, air=AMBIENT) -> np.ndarray:

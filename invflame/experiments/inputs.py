@@ -10,6 +10,7 @@ from invflame.field import Field
 from invflame.geometry import VoxelGrid
 from invflame.measurement_file import MeasurementFile, read_measurement
 from invflame.phantoms import make_phantom
+from invflame.phantoms.plume import plume_soot
 from invflame.spectroscopy.absorption_table import AbsorptionTable, default_linelists
 
 
@@ -41,7 +42,9 @@ def read_data(cfg: dict) -> MeasurementFile | None:
 
 def load_truth(cfg: dict, grid: VoxelGrid | None = None) -> Field | None:
     """The ground truth named by ``truth.source``: a phantom name or a field ``.npz`` file;
-    None for ``"none"`` (measured data without a truth).
+    None for ``"none"`` (measured data without a truth). With ``truth.soot`` > 0 a soot-free
+    truth gains the soot layer of :func:`invflame.phantoms.plume.plume_soot` of that peak
+    volume fraction, on its native grid, as its fifth field.
 
     Parameters
     ----------
@@ -63,4 +66,7 @@ def load_truth(cfg: dict, grid: VoxelGrid | None = None) -> Field | None:
                 f"truth.source {source!r} is neither 'poolfire', 'synthetic' nor an existing file"
             )
         field = Field.load(path)
+    peak = cfg["truth"]["soot"]
+    if peak > 0 and field.soot is None:
+        field = field.with_soot(plume_soot(field, peak))
     return field if grid is None else field.resample(grid)

@@ -8,7 +8,7 @@ import sys
 import numpy as np
 import scipy.ndimage
 
-FIELD_NAMES = ("T", "CO2", "H2O", "CH4")
+FIELD_NAMES = ("T", "CO2", "H2O", "CH4", "soot")
 
 
 def normalized_mse(truth: np.ndarray, estimate: np.ndarray, spans=None) -> dict[str, float]:
@@ -21,7 +21,8 @@ def normalized_mse(truth: np.ndarray, estimate: np.ndarray, spans=None) -> dict[
     Parameters
     ----------
     truth, estimate : ndarray, shape (n_fields, nx, ny, nz)
-        Fields in the order (T [K], X_CO2, X_H2O, X_CH4).
+        Fields in the order (T [K], X_CO2, X_H2O, X_CH4), then optionally the soot volume
+        fraction f_v [1] (scored as ``"soot"``).
     spans : array_like, shape (n_fields,), optional
         Ranges to normalize by (default: the truth's max − min per field).
 
@@ -73,8 +74,18 @@ def flame_mse(truth: np.ndarray, estimate: np.ndarray,
                           spans=truth.max(axis=(1, 2, 3)) - truth.min(axis=(1, 2, 3)))
 
 
+def common_fields(truth: np.ndarray, estimate: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The fields both hold: the gas (T in K, mole fractions), and the soot volume fraction
+    only when the truth and the estimate both carry it as a fifth field."""
+    truth, estimate = np.asarray(truth), np.asarray(estimate)
+    common = min(len(truth), len(estimate))
+    return truth[:common], estimate[:common]
+
+
 def psnr(truth: np.ndarray, estimate: np.ndarray) -> dict[str, float]:
-    """Peak signal-to-noise ratio per field in dB, on the same normalization as the MSE."""
+    """Peak signal-to-noise ratio per field in dB, on the same normalization as the MSE (the
+    fields of :func:`common_fields`)."""
+    truth, estimate = common_fields(truth, estimate)
     return {k: float(-10.0 * np.log10(v)) if v > 0 else float("inf")
             for k, v in normalized_mse(truth, estimate).items()}
 
@@ -121,7 +132,8 @@ def smoothed(fields: np.ndarray, sigma_voxels: float = 1.0) -> np.ndarray:
 def field_scores(truth: np.ndarray, estimate: np.ndarray, threshold: float = 500.0) -> dict:
     """Every score of one estimate against the truth: ``mse``, ``mse_flame`` (see
     :func:`flame_mse`) and ``hot_volume_ratio`` (None when the truth has no voxel above
-    ``threshold`` K)."""
+    ``threshold`` K), over the fields of :func:`common_fields`."""
+    truth, estimate = common_fields(truth, estimate)
     hot = np.any(np.asarray(truth)[0] > threshold)
     return {"mse": normalized_mse(truth, estimate),
             "mse_flame": flame_mse(truth, estimate, threshold),

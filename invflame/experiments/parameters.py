@@ -22,7 +22,8 @@ def make_representation(cfg: dict, scene: Scene):
                                          batch_rays=settings["rays_per_batch"], **network)
     if kind == "neural-centres":
         return NeuralCentresRepresentation(scene, **network)
-    return VoxelRepresentation(scene.grid, scene.operator, temperature_range=_t_range(scene))
+    return VoxelRepresentation(scene.grid, scene.operator, temperature_range=_t_range(scene),
+                               soot_max=cfg["soot"]["max"])
 
 
 def starting_parameters(cfg: dict, representation, start: np.ndarray, progress: bool):
@@ -35,10 +36,13 @@ def starting_parameters(cfg: dict, representation, start: np.ndarray, progress: 
 
 
 def physical_fields(scene: Scene, fields: np.ndarray) -> np.ndarray:
-    """Fields clipped to the physical bounds, mole fractions scaled to sum to at most 1."""
-    lower, upper = physical_bounds(*_t_range(scene))
-    fields = np.clip(fields, lower.reshape(4, 1, 1, 1), upper.reshape(4, 1, 1, 1))
-    fields[1:] /= np.maximum(fields[1:].sum(axis=0), 1.0)  # a network may exceed sum(X) = 1
+    """Fields clipped to the physical bounds, mole fractions scaled to sum to at most 1; a
+    soot volume fraction (fifth field) clipped to [0, 1)."""
+    lower, upper = physical_bounds(*_t_range(scene), np.nextafter(1.0, 0.0)
+                                   if len(fields) == 5 else None)
+    fields = np.clip(fields, lower[:, None, None, None], upper[:, None, None, None])
+    fractions = fields[1:4]
+    fractions /= np.maximum(fractions.sum(axis=0), 1.0)  # a network may exceed sum(X) = 1
     return fields
 
 

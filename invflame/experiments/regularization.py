@@ -8,6 +8,7 @@ from pathlib import Path
 import solvers
 from invflame.atomic_files import write_json
 from invflame.experiments.measurement import Measurement
+from invflame.experiments.model_error import estimate_model_error
 from invflame.scene import Scene
 
 
@@ -21,18 +22,23 @@ def regularizer_weight(cfg: dict, scene: Scene, measurement: Measurement, lam: f
     return solvers.problem_weight(lam, measurement.n_measurements)
 
 
-def choose_lambda(cfg: dict, representation, measurement: Measurement, x0, out: Path,
-                  log) -> solvers.ParameterChoice:
+def choose_lambda(cfg: dict, scene: Scene, representation, measurement: Measurement, x0,
+                  out: Path, log) -> solvers.ParameterChoice:
     """λ by Morozov's discrepancy principle (:func:`solvers.discrepancy_principle`).
 
     Every trial solves the configured problem from ``x0`` with the configured solver and
     stopping rules; the choice and all trials go to ``lambda_choice.json`` and
-    ``l_curve.png`` in ``out``.
+    ``l_curve.png`` in ``out``. With ``regularizer.tau = "model-error"``, τ is 1 plus the
+    model error of ``scene`` estimated from prior flames
+    (:func:`invflame.experiments.model_error.estimate_model_error`, written to
+    ``model_error.json``).
 
     Parameters
     ----------
     cfg : dict
         Validated configuration (``regularizer.lambda_range``, ``regularizer.tau``).
+    scene : Scene
+        The reconstruction's scene.
     representation : VoxelRepresentation, NeuralFieldRepresentation, ...
         Gives the problem for each λ.
     measurement : Measurement
@@ -60,8 +66,16 @@ def choose_lambda(cfg: dict, representation, measurement: Measurement, x0, out: 
             f"after {result.iterations} iterations ({result.stop_reason})")
         return result.x, final.misfit, final.regularizer
 
+    tau = reg["tau"]
+    if tau == "model-error":
+        error = estimate_model_error(cfg, scene, measurement, seed=cfg["seed"], log=log)
+        write_json(out / "model_error.json", error.as_dict())
+        tau = error.tau
+        log(f"model error from {error.chi2_per_value.size} prior flames: chi2/M {error.level:.4g}"
+            f" (spread {error.chi2_per_value.min():.4g}-{error.chi2_per_value.max():.4g}); "
+            f"tau = {tau:.4g}")
     low, high = reg["lambda_range"]
-    choice = solvers.discrepancy_principle(solve_at, m, high, low, tau=reg["tau"], refine=2)
+    choice = solvers.discrepancy_principle(solve_at, m, high, low, tau=tau, refine=2)
     write_json(out / "lambda_choice.json", choice.as_dict())
     solvers.plot_l_curve(choice, out / "l_curve.png")
     log(choice.message)

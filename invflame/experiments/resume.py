@@ -76,7 +76,7 @@ def _content_hash(*arrays) -> str:
     return digest.hexdigest()
 
 
-def run_fingerprint(cfg: dict, truth: Field | None, measurement: Measurement) -> dict:
+def run_fingerprint(cfg: dict, truth: Field | None, measurement: Measurement | None) -> dict:
     """What defines a run beside its configuration, for :func:`check_fingerprint`.
 
     Parameters
@@ -85,8 +85,9 @@ def run_fingerprint(cfg: dict, truth: Field | None, measurement: Measurement) ->
         Validated configuration (its solver's ``Options`` dataclass is described).
     truth : Field or None
         Ground truth on the reconstruction grid.
-    measurement : Measurement
-        Measured spectra and noise σ.
+    measurement : Measurement or None
+        Measured spectra and noise σ; None leaves ``data sha256`` out (for a finished run
+        whose simulated data follow from the rest and are not rendered again).
 
     Returns
     -------
@@ -99,7 +100,8 @@ def run_fingerprint(cfg: dict, truth: Field | None, measurement: Measurement) ->
     options = solvers.get(cfg["solver"]["name"]).Options
     return {
         "truth sha256": None if truth is None else _content_hash(truth.values),
-        "data sha256": _content_hash(measurement.data, measurement.sigma),
+        **({} if measurement is None else
+           {"data sha256": _content_hash(measurement.data, measurement.sigma)}),
         "invflame version": importlib.metadata.version("invflame"),
         "solver options": f"{options.__module__}.{options.__qualname__}("
                           + ", ".join(f"{f.name}: {f.type} = {f.default!r}"
@@ -116,7 +118,7 @@ def check_fingerprint(folder, fingerprint: dict, force: bool = False) -> list[st
         The run folder; its ``fingerprint.json`` is compared (a folder without one, written
         before fingerprints were kept, has nothing to compare).
     fingerprint : dict
-        :func:`run_fingerprint` of the resumed run.
+        :func:`run_fingerprint` of the resumed run; only its entries are compared.
     force : bool, optional
         Return the differences instead of refusing.
 
@@ -133,7 +135,8 @@ def check_fingerprint(folder, fingerprint: dict, force: bool = False) -> list[st
     saved = Path(folder) / FINGERPRINT
     if not saved.is_file():
         return []
-    changed = _differences(read_json(saved), fingerprint)
+    changed = _differences({k: v for k, v in read_json(saved).items() if k in fingerprint},
+                           fingerprint)
     return _refuse_unless_forced(folder, changed, force,
                                  "what defines the run changed since it was written",
                                  "the same truth, data and code")

@@ -4,7 +4,9 @@
 is computed (the command line checks ``--out`` so). :class:`RunLock` holds ``.lock`` (the
 writer's process id) in a run folder while a run writes it: a second writer gets an
 :class:`~invflame.errors.OutputError` naming the folder and the holder's pid; the lock of a
-process that no longer exists is taken over, with a warning.
+process that no longer exists is taken over, with a warning. Where the system tells when a
+process started (Linux ``/proc``), the lock records it too, so that a lock whose process id has
+since been given to another process is recognized as stale.
 While the lock is held the folder also holds :data:`INCOMPLETE`, which says that the outputs
 beside it are partial; :meth:`RunLock.complete` removes it once every output is written, so a
 folder left by a crash or a kill is marked as such.
@@ -22,7 +24,8 @@ from invflame.atomic_files import write_text
 from invflame.errors import OutputError
 
 LOCK = ".lock"
-"""Lock file of a run folder: the writing process's id and host name, one a line."""
+"""Lock file of a run folder: the writing process's id, host name and start time (clock ticks
+since boot, empty where unknown), one a line."""
 INCOMPLETE = "INCOMPLETE"
 """Marker of a run folder whose outputs are partial (being written, or left by a crash)."""
 
@@ -55,14 +58,26 @@ def output_folder(path) -> Path:
     return path
 
 
-def _alive(pid: int) -> bool:
+def _started(pid: int) -> str:
+    """When process ``pid`` started, in clock ticks since boot (``/proc/<pid>/stat`` field 22);
+    empty where the system does not say (no ``/proc``) or no such process runs."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return ""
+    return stat.rpartition(")")[2].split()[19]  # fields after the command name start at 3
+
+
+def _alive(pid: int, started: str) -> bool:
+    """Whether process ``pid`` runs and, if ``started`` is known, is the one that started then
+    (not a later process given the same id)."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
         return False
     except PermissionError:  # exists, owned by someone else
-        return True
-    return True
+        pass
+    return not started or _started(pid) in ("", started)
 
 
 class RunLock:
@@ -89,7 +104,8 @@ class RunLock:
         fd, mine = tempfile.mkstemp(dir=self.folder, prefix=".lock.", suffix=".tmp")
         try:
             with os.fdopen(fd, "w") as handle:
-                handle.write(f"{os.getpid()}\n{socket.gethostname()}\n")
+                pid = os.getpid()
+                handle.write(f"{pid}\n{socket.gethostname()}\n{_started(pid)}\n")
             while True:
                 try:  # a hard link appears whole, with its content, or fails if taken
                     os.link(mine, self.lock)
@@ -108,10 +124,10 @@ class RunLock:
             text = self.lock.read_text()
         except FileNotFoundError:  # released meanwhile: try again
             return
-        pid_text, _, host = text.partition("\n")
+        pid_text, host, started = (text.split("\n") + ["", ""])[:3]
         pid, host = (int(pid_text) if pid_text.isdigit() else None), host.strip()
         here = socket.gethostname()
-        if pid is not None and (_alive(pid) or host not in ("", here)):
+        if pid is not None and (_alive(pid, started.strip()) or host not in ("", here)):
             where = "" if host in ("", here) else f" on host {host}"
             raise OutputError(f"run folder {self.folder} is being written by process {pid}"
                               f"{where} (lock {self.lock}): wait for it to finish, stop it, or "

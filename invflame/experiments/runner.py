@@ -54,7 +54,7 @@ from invflame.atomic_files import read_json, write_csv, write_json, write_npz, w
 from invflame.background import background_from_config
 from invflame.experiments import config as configuration
 from invflame.experiments.data_start import band_tomography_start
-from invflame.experiments.initialization import ambient, noisy_truth
+from invflame.experiments.initialization import ambient, noisy_truth, with_soot_field
 from invflame.experiments.inputs import absorption_table, load_truth, read_data
 from invflame.experiments.measurement import (
     Measurement,
@@ -82,7 +82,6 @@ from invflame.field import Field
 from invflame.geometry import VoxelGrid, paper_rig, ray_coverage
 from invflame.geometry.rig_file import check_instrument
 from invflame.measurement_file import MeasurementFile
-from invflame.phantoms.plume import plume_soot
 from invflame.scene import Scene
 from invflame.spectroscopy.absorption_table import AbsorptionTable
 
@@ -109,8 +108,10 @@ class Log:
             print(line, flush=True)
 def build_scene(cfg: dict, table: AbsorptionTable | None = None,
                 measured: MeasurementFile | None = None) -> Scene:
-    """The reconstruction scene of a configuration: grid, rig, sub-rays, table, instrument,
-    background (``[background]``, :func:`invflame.background.background_from_config`).
+    """The reconstruction scene of a configuration: grid (``[grid]``,
+    :func:`invflame.experiments.config.reconstruction_grid`), rig, sub-rays, table,
+    instrument, background (``[background]``, :func:`invflame.background.background_from_config`)
+    and, with ``soot.reconstruct``, the soot volume fraction as a fifth input field.
 
     Parameters
     ----------
@@ -127,7 +128,7 @@ def build_scene(cfg: dict, table: AbsorptionTable | None = None,
     InputDataError
         If the rig's cameras state another resolution or window than the scene's.
     """
-    grid = VoxelGrid.poolfire(cfg["truth"]["grid"])
+    grid = configuration.reconstruction_grid(cfg)
     spec = configuration.rig_spec(cfg)
     if spec is not None:
         rig = spec.rig
@@ -153,7 +154,8 @@ def build_scene(cfg: dict, table: AbsorptionTable | None = None,
                          "the measurement" if measured else "[instrument] and [spectrum]")
     return Scene(grid, rig, table, resolution=resolution, out_wavenumber=out_wavenumber,
                  rays_per_pixel=cfg["rig"]["rays_per_pixel"],
-                 background=background_from_config(cfg["background"]))
+                 background=background_from_config(cfg["background"]),
+                 soot_input=cfg["soot"]["reconstruct"])
 
 
 def measure(cfg: dict, scene: Scene, truth: Field) -> Measurement:
@@ -166,7 +168,8 @@ def measure(cfg: dict, scene: Scene, truth: Field) -> Measurement:
     scene : Scene
         The reconstruction's scene.
     truth : Field
-        Ground truth on its native grid.
+        Ground truth on its native grid (:func:`load_truth`); its soot, if any, is seen in the
+        data, whether or not the reconstruction models soot.
     """
     data = cfg["data"]
     if data["inverse_crime"]:
@@ -175,9 +178,8 @@ def measure(cfg: dict, scene: Scene, truth: Field) -> Measurement:
         table = absorption_table(cfg, cfg["spectrum"]["step"] / data["step_divisor"])
         synthesis = synthesis_scene(scene, truth, table, data["rays_per_pixel"]
                                     ).with_background(scene.background)
+    synthesis = synthesis.with_soot(None, soot_input=truth.soot is not None)
     soot = cfg["truth"]["soot"]
-    if soot > 0:  # the data see soot; the reconstruction's scene models gas only
-        synthesis = synthesis.with_soot(plume_soot(truth, soot))
     background = None if scene.background is None else scene.background.describe()
     return simulate_measurement(synthesis, truth, cfg["noise"], seed=cfg["seed"] + 1,
                                 provenance={"inverse_crime": data["inverse_crime"],
@@ -187,24 +189,35 @@ def measure(cfg: dict, scene: Scene, truth: Field) -> Measurement:
 
 
 def initial_fields(cfg: dict, truth: Field, scene: Scene, measurement: Measurement) -> np.ndarray:
-    """Starting fields on the reconstruction grid: from the data (band tomography), ambient
-    air, or the paper's noisy truth (``truth`` on the reconstruction grid)."""
+    """Starting fields ``scene.field_shape`` on the reconstruction grid: from the data (band
+    tomography, masked values left out), ambient air, or the paper's noisy truth (``truth``
+    on the reconstruction grid). When the scene reconstructs soot, the data-driven and
+    ambient starts hold none (f_v = 0), the noisy truth its soot with the same noise (none
+    for a soot-free truth)."""
     init = cfg["init"]
     if init["kind"] == "ambient":
-        return ambient(scene.grid.shape, init["ambient"])
-    if init["kind"] == "band-tomography":
-        masked = measurement.data.size - measurement.n_measurements
-        if masked:
-            raise configuration.ConfigError(
-                f"'init.kind' = 'band-tomography' integrates every pixel over every wavenumber, "
-                f"but the measurement masks {masked} values (bad pixels or wavenumbers): start "
-                "from 'ambient' air instead")
-        return band_tomography_start(scene, measurement.data,
-                                     sigma=measurement.sigma if measurement.noisy else None,
-                                     temperature_rise_st=init["temperature_rise"],
-                                     ambient=init["ambient"]).astype(np.float32)
-    return noisy_truth(truth.values, init["noise"], seed=cfg["seed"])
+        start = ambient(scene.grid.shape, init["ambient"])
+    elif init["kind"] == "band-tomography":
+        measured = np.isfinite(np.broadcast_to(measurement.sigma, measurement.data.shape))
+        start = band_tomography_start(scene, measurement.data,
+                                      sigma=measurement.sigma if measurement.noisy else None,
+                                      temperature_rise_st=init["temperature_rise"],
+                                      ambient=init["ambient"], measured=measured
+                                      ).astype(np.float32)
+    else:
+        start = noisy_truth(truth.values, init["noise"], seed=cfg["seed"])
+    return with_soot_field(start, scene.soot_input)
 
+
+def _on_grid(cfg: dict, truth: Field, grid: VoxelGrid) -> Field:
+    """The truth resampled onto the reconstruction grid, or a ConfigError naming the box."""
+    try:
+        return truth.resample(grid)
+    except ValueError as err:
+        raise configuration.ConfigError(
+            f"'grid.lower'..'grid.upper' = {list(grid.lower)}..{list(grid.upper)} m reaches "
+            f"outside the truth {cfg['truth']['source']!r} ({err}): place the box inside "
+            f"{list(truth.grid.lower)}..{list(truth.grid.upper)} m") from err
 
 
 def run_experiment(cfg: dict, out_dir, resume: bool = False, progress: bool = True,
@@ -259,7 +272,14 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
     solver = cfg["solver"]
     summary_path, checkpoint = out / "summary.json", out / "checkpoint.npz"
     changed = check_resumable(cfg, out, force) if resume else []
+    measured = read_data(cfg)
+    scene = build_scene(cfg, table, measured)
+    native = load_truth(cfg)
+    truth = None if native is None else _on_grid(cfg, native, scene.grid)
     if resume and summary_path.is_file():
+        # finished: simulated data follow from the configuration, truth and code checked here
+        given = measurement if measured is None else measured.measurement
+        check_fingerprint(out, run_fingerprint(cfg, truth, given), force)
         return read_json(summary_path)
     if not resume:
         for stale in (summary_path, checkpoint, out / "log.txt", out / "lambda_choice.json",
@@ -267,11 +287,6 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
             stale.unlink(missing_ok=True)
     log = Log(out / "log.txt", echo=progress)
     write_text(out / "config.toml", configuration.dumps(cfg))
-
-    measured = read_data(cfg)
-    scene = build_scene(cfg, table, measured)
-    native = load_truth(cfg)
-    truth = None if native is None else native.resample(scene.grid)
     log(f"scene: grid {scene.grid.shape}, {scene.n_rays} pixels x {scene.rays_per_pixel} "
         f"sub-rays, {scene.wavenumber.size} line-by-line points -> "
         f"{scene.out_wavenumber.size} output points; truth {cfg['truth']['source']}")
@@ -302,7 +317,8 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
     choice_file = out / "lambda_choice.json"
     if isinstance(reg["lambda"], str):  # a rule: chosen from the data, once
         chosen = (read_json(choice_file) if resume and choice_file.is_file() else
-                  choose_lambda(cfg, representation, measurement, x0, out, log).as_dict())
+                  choose_lambda(cfg, scene, representation, measurement, x0, out,
+                                log).as_dict())
         reg["lambda"] = float(chosen["lam"])
         described["lambda"] = (f"{reg['lambda']:.4g} from the discrepancy principle"
                                + ("" if chosen["reached"] else " (criterion not reached: "
@@ -350,8 +366,7 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
         "iterations": result.iterations,
         "epochs": result.iterations / per_epoch,
         "stop_reason": result.stop_reason,
-        "converged": not result.stop_reason.startswith(("max_iter", "time_budget",
-                                                          "non-finite")),
+        "converged": result.converged,
         "loss": {"initial": history["loss"][0], "final": result.loss},
         "chi2_per_measurement": {"initial": chi2_per_value(scene.simulate(start), measurement),
                                  "final": chi2_per_value(simulated, measurement)},

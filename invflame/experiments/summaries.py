@@ -52,8 +52,10 @@ def chi2_per_value(simulated: np.ndarray, measurement: Measurement) -> float:
 
 def truth_scores(truth: np.ndarray, fields: np.ndarray, start: np.ndarray) -> dict:
     """The summary's scores against a ground truth (fields ``(4, nx, ny, nz)``: T in K, mole
-    fractions): those of :func:`~invflame.experiments.metrics.field_scores` for the result and,
-    suffixed ``_initial``, for the start, and the result's PSNR in dB."""
+    fractions, a fifth the soot volume fraction): those of
+    :func:`~invflame.experiments.metrics.field_scores` for the result and, suffixed
+    ``_initial``, for the start, and the result's PSNR in dB. Soot is scored (``"soot"``) only
+    when both the truth and the result hold it."""
     scores, initial = field_scores(truth, fields), field_scores(truth, start)
     return {**scores, "mse_initial": initial["mse"], "mse_flame_initial": initial["mse_flame"],
             "hot_volume_ratio_initial": initial["hot_volume_ratio"],

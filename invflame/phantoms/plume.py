@@ -22,7 +22,9 @@ follow complete combustion CH4 + 2 O2 + 7.52 N2 → CO2 + 2 H2O + 7.52 N2
 Optional soot layer (:func:`plume_soot`): soot forms where fuel is hot, on the rich side of the
 flame sheet, so its volume fraction is taken proportional to the fuel's mole fraction times the
 temperature rise, scaled to a given peak. The plume itself, like the pool fire, is soot-free;
-the layer is a separate field for :class:`invflame.scene.Scene` (``soot=``).
+the layer is a separate field, known to a :class:`invflame.scene.Scene` (``soot=``) or carried
+by the truth as its fifth field (:meth:`invflame.field.Field.with_soot`, ``truth.soot`` in a
+configuration).
 
 Optional perturbation: puffing, a travelling-wave modulation of the centreline rise at the
 frequency ``f = 1.5 / √D`` Hz (Cetegen & Ahmed, Combust. Flame 93, 1993), and turbulence, a

@@ -8,8 +8,9 @@ import operators as op
 import solvers
 from invflame.geometry import VoxelGrid
 from invflame.representations.normalization import (
-    SCALES,
+    SOOT_MAX,
     denormalize,
+    field_scales,
     normalize,
     per_field,
     physical_bounds,
@@ -52,29 +53,36 @@ class VoxelRepresentation(Representation):
         Reconstruction grid.
     forward : operators.Operator
         Voxel forward map from physical fields ``(4, nx, ny, nz)`` (T in K, mole fractions) to
-        data, e.g. the scene's :attr:`~invflame.scene.Scene.operator`.
+        data, e.g. the scene's :attr:`~invflame.scene.Scene.operator`; or from
+        ``(5, nx, ny, nz)``, the soot volume fraction last (a scene with ``soot_input``): soot
+        is then reconstructed too.
     temperature_range : tuple of float, optional
         Physical bounds on T in K (default 250–2500 K, the absorption table's range).
+    soot_max : float, optional
+        Upper bound of the soot volume fraction when the map takes one (dimensionless,
+        default :data:`~invflame.representations.normalization.SOOT_MAX`); its lower bound
+        is 0.
     """
 
     kind = "voxel"
     iterations_per_epoch = 1
 
     def __init__(self, grid: VoxelGrid, forward: op.Operator,
-                 temperature_range=(250.0, 2500.0)):
-        dims = (4, *grid.shape)
-        if tuple(forward.dims) != dims:
-            raise ValueError(f"forward map takes {forward.dims}, expected {dims} for a "
-                             f"{grid.shape} grid")
+                 temperature_range=(250.0, 2500.0), soot_max: float = SOOT_MAX):
+        if tuple(forward.dims) not in ((4, *grid.shape), (5, *grid.shape)):
+            raise ValueError(f"forward map takes {forward.dims}, expected {(4, *grid.shape)} "
+                             f"(or 5 fields with soot) for a {grid.shape} grid")
+        dims = tuple(forward.dims)
         self.grid = grid
         self.dims = dims
-        self.forward = forward @ op.Diagonal(per_field(SCALES, dims), dtype=forward.dtype,
-                                             name="denormalize")
-        self.lower, self.upper = (per_field(normalize(bound), dims)
-                                  for bound in physical_bounds(*temperature_range))
+        self.forward = forward @ op.Diagonal(per_field(field_scales(dims[0]), dims),
+                                             dtype=forward.dtype, name="denormalize")
+        bounds = physical_bounds(*temperature_range, soot_max if dims[0] == 5 else None)
+        self.lower, self.upper = (per_field(normalize(bound), dims) for bound in bounds)
 
     def initial_parameters(self, fields) -> np.ndarray:
-        """Parameters for physical fields ``(4, nx, ny, nz)``, clipped to the bounds."""
+        """Parameters for physical fields ``(4, nx, ny, nz)`` (``(5, nx, ny, nz)`` with soot),
+        clipped to the bounds."""
         fields = np.asarray(fields)
         if fields.shape != self.dims:
             raise ValueError(f"fields must have shape {self.dims}, got {fields.shape}")
@@ -101,12 +109,14 @@ class VoxelRepresentation(Representation):
         """
         forward, data = whitened(self.forward, data, sigma)
         return solvers.Problem(
-            forward, data, regularizer=regularizer_for(regularizer, self.grid), lam=lam,
+            forward, data, regularizer=regularizer_for(regularizer, self.grid, self.dims[0]),
+            lam=lam,
             lower=self.lower, upper=self.upper, x0=x0,
             name=f"voxel/{regularizer}",
             metadata={"representation": self.kind, "regularizer": regularizer, "lambda": lam},
         )
 
     def fields(self, theta) -> np.ndarray:
-        """Physical fields ``(4, nx, ny, nz)`` (T in K, mole fractions) at voxel centres."""
+        """Physical fields ``(4, nx, ny, nz)`` (T in K, mole fractions; with soot a fifth,
+        the soot volume fraction) at voxel centres."""
         return denormalize(np.asarray(theta).reshape(self.dims))

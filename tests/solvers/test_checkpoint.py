@@ -117,6 +117,8 @@ def test_stopping_rules_and_callbacks(nonlinear_problem):
     assert solvers.solve(p, "gd", rtol_loss=1e-3).stop_reason.startswith("rtol_loss")
     assert solvers.solve(p, "gd", rtol_x=1e-3).stop_reason.startswith("rtol_x")
     assert solvers.solve(p, "gd", gtol=1e-4).stop_reason.startswith("gtol")
+    assert solvers.solve(p, "gd", gtol=1e-4).converged
+    assert not solvers.solve(p, "gd", max_iter=2).converged
     # over a window: stops once the loss changed less than rtol over the last 5 iterations
     windowed = solvers.solve(p, "gd", rtol_loss=1e-3, loss_window=5, max_iter=500)
     assert windowed.stop_reason.startswith("rtol_loss") and "over 5 iterations" in \
@@ -131,6 +133,9 @@ def test_stopping_rules_and_callbacks(nonlinear_problem):
     assert timed.stop_reason.startswith("time_budget") and timed.iterations == 0
     stopped = solvers.solve(p, "gd", callbacks=[lambda run: run.iteration == 3])
     assert stopped.iterations == 3 and stopped.stop_reason.startswith("callback")
+    assert not timed.converged and not stopped.converged
+    stopped.stop_reason = "scipy L-BFGS-B: ABNORMAL: "  # a failed line search, 0 iterations
+    assert not stopped.converged
     stream = io.StringIO()
     bar = solvers.ProgressBar(file=stream, mininterval=0)
     result = solvers.solve(p, "adam", lr=0.05, max_iter=7, callbacks=[bar])

@@ -14,8 +14,9 @@ as in NeRF (Mildenhall et al. 2020), with the emission physics of the voxel path
 3. each set of samples is a piecewise-homogeneous ray (sample lengths sum to the chord),
    rendered by the JAX emission kernel :func:`operators.emission_rte.emission_radiance`
    through :func:`operators.torch_bridge.torch_function` (its backward pass is the kernel's
-   VJP); the sub-ray spectra of a pixel are averaged, then convolved with the instrument
-   lineshape (the scene's ILS matrix).
+   VJP), the coarse and the fine set in one call, in front of the scene's background and
+   with its known soot, as the voxel map renders them; the sub-ray spectra of a pixel are
+   averaged, then convolved with the instrument lineshape (the scene's ILS matrix).
 
 **Training.** Solver iteration :math:`k` belongs to epoch :math:`e = \lfloor k / E \rfloor`,
 :math:`E` = :attr:`NeuralFieldRepresentation.iterations_per_epoch` :math:`= \lceil N / B
@@ -35,7 +36,9 @@ each, so that the data term is an unbiased estimate of a noise-weighted sum of s
 all pixels on the same scale as the deterministic problem's (about the number of
 measurements when the model fits to the noise), and λ weighs the regularizer against it as it
 does for voxels. The sample jitter of the sub-rays and the regularizer's voxel centres are
-drawn from the iteration's ``rng``.
+drawn from the iteration's ``rng``. The data term is a sum over pixels, so a batch is rendered
+and back-propagated in chunks of ``renderer.chunk_rays`` pixels: the memory is that of one
+chunk, the gradient that of the whole batch.
 
 **Regularizer.** :math:`\Phi` is the voxel regularizer
 (:func:`~invflame.representations.voxel.regularizer_for`) of the fine network's normalized
@@ -88,24 +91,28 @@ class NeuralRendering(Operator):
         self.rep = rep
 
     def _fine_inputs(self, theta):
-        """Per pixel batch: (fine sample points, lengths), from the coarse network, no
-        gradient."""
+        """Per rendering call: (sub-rays, fine sample points, lengths), from the coarse
+        network, no gradient."""
         rep, renderer = self.rep, self.rep.renderer
         theta_c, _ = rep.split(torch.as_tensor(theta, dtype=renderer.dtype))
-        offsets, quantiles = renderer.deterministic_draws()
+        offsets, quantiles = renderer.deterministic_draws(renderer.chunk_rays)
         for pixels in renderer.batches():
             rays = renderer.sub_rays(pixels)
             with torch.no_grad():
                 *_, t_fine, lengths = renderer.samples(
                     rays, partial(rep.coarse.evaluate, theta_c), offsets, quantiles)
-            yield renderer.points(rays, t_fine), lengths
+            yield rays, renderer.points(rays, t_fine), lengths
+
+    def _fine_fields(self, theta_f, points):
+        """The kernel fields of the fine network at ``points``."""
+        return self.rep.renderer.kernel_fields(self.rep.fine.evaluate(theta_f, points), points)
 
     def _forward(self, x):
         rep = self.rep
         theta_f = rep.split(torch.as_tensor(x, dtype=rep.renderer.dtype))[1]
         with torch.no_grad():
-            out = [rep.renderer.measure(rep.fine.evaluate(theta_f, p), s)
-                   for p, s in self._fine_inputs(x)]
+            out = [rep.renderer.measure(r, (self._fine_fields(theta_f, p), s))[0]
+                   for r, p, s in self._fine_inputs(x)]
         return to_numpy(rep.renderer.unpad(out))
 
     def _jvp(self, x, v):
@@ -113,22 +120,22 @@ class NeuralRendering(Operator):
         theta_f = rep.split(torch.as_tensor(x, dtype=renderer.dtype))[1]
         v_f = rep.split(torch.as_tensor(v, dtype=renderer.dtype))[1]
         out = []
-        for p, s in self._fine_inputs(x):
-            fields, d_fields = torch.func.jvp(lambda t, p=p: rep.fine.evaluate(t, p),
+        for r, p, s in self._fine_inputs(x):
+            fields, d_fields = torch.func.jvp(partial(self._fine_fields, points=p),
                                               (theta_f,), (v_f,))
-            out.append(renderer.measure_jvp(fields, s, d_fields))
+            out.append(renderer.measure_jvp(r, fields, s, d_fields))
         return to_numpy(renderer.unpad(out))
 
     def _vjp(self, x, w):
         rep, renderer = self.rep, self.rep.renderer
         theta = torch.tensor(x, dtype=renderer.dtype, requires_grad=True)
         w = torch.as_tensor(w, dtype=renderer.dtype)
-        pad = -renderer.n_rays % renderer.batch_rays
+        pad = -renderer.n_rays % renderer.chunk_rays
         w = torch.cat([w, torch.zeros((pad, w.shape[1]), dtype=w.dtype)])
-        for (p, s), w_batch in zip(self._fine_inputs(x), w.split(renderer.batch_rays),
-                                   strict=True):
-            fields = rep.fine.evaluate(rep.split(theta)[1], p)
-            torch.sum(renderer.measure(fields, s) * w_batch).backward()
+        for (r, p, s), w_part in zip(self._fine_inputs(x), w.split(renderer.chunk_rays),
+                                     strict=True):
+            fields = self._fine_fields(rep.split(theta)[1], p)
+            torch.sum(renderer.measure(r, (fields, s))[0] * w_part).backward()
         return to_numpy(theta.grad)
 
 
@@ -166,37 +173,48 @@ class StochasticObjective:
         self.centre_regularizer = (CentreRegularizer(regularizer, rep.grid, dtype)
                                    if regularizer != "none" and self.lam > 0 else None)
 
-    def loss(self, theta: torch.Tensor, pixels: torch.Tensor, offsets: torch.Tensor,
-             quantiles: torch.Tensor, centres: torch.Tensor | None) -> torch.Tensor:
-        """The loss of one batch, differentiable in ``theta``.
+    def terms(self, theta: torch.Tensor, pixels: torch.Tensor, offsets: torch.Tensor,
+              quantiles: torch.Tensor, centres: torch.Tensor | None):
+        """The loss of one batch in parts that sum to it, each differentiable in ``theta``:
+        the data term of every rendering call (:meth:`NeuralRenderer.chunks`), then the
+        regularizer. A generator: a part's graph is built when it is drawn, so a caller that
+        back-propagates each part before drawing the next holds one rendering call's graph.
 
         Parameters
         ----------
         theta : torch.Tensor, shape (n_parameters,)
             Coarse then fine weights.
-        pixels : torch.Tensor of int, shape (batch_rays,)
+        pixels : torch.Tensor of int, shape (B,)
             Pixel indices.
         offsets, quantiles : torch.Tensor
             Per sub-ray draws, see :meth:`NeuralRenderer.samples`.
         centres : torch.Tensor of int, shape (M,), or None
             Distinct flat voxel indices for the regularizer estimate (ignored without one).
 
-        Returns
-        -------
+        Yields
+        ------
         torch.Tensor, scalar (dimensionless: residuals are in units of σ)
         """
         rep, renderer = self.rep, self.rep.renderer
-        theta_c, theta_f = rep.split(theta)
-        coarse, fine = renderer.render(pixels, partial(rep.coarse.evaluate, theta_c),
-                                       partial(rep.fine.evaluate, theta_f), offsets, quantiles)
-        weights, target = self.weights[pixels], self.target[pixels]
-        misfit = (torch.sum((coarse * weights - target) ** 2)
-                  + torch.sum((fine * weights - target) ** 2))
-        loss = renderer.n_rays / (2 * pixels.numel()) * misfit
+        scale = renderer.n_rays / (2 * pixels.numel())
+        for pixel_part, ray_part in renderer.chunks(pixels.numel()):
+            theta_c, theta_f = rep.split(theta)
+            part = pixels[pixel_part]
+            coarse, fine = renderer.render(
+                part, partial(rep.coarse.evaluate, theta_c), partial(rep.fine.evaluate, theta_f),
+                offsets[ray_part], quantiles[ray_part])
+            weights, target = self.weights[part], self.target[part]
+            yield scale * (torch.sum((coarse * weights - target) ** 2)
+                           + torch.sum((fine * weights - target) ** 2))
         if self.centre_regularizer is not None:
-            u = partial(rep.fine.evaluate, theta_f, normalized=True)
-            loss = loss + self.lam * self.centre_regularizer(u, centres)
-        return loss
+            u = partial(rep.fine.evaluate, rep.split(theta)[1], normalized=True)
+            yield self.lam * self.centre_regularizer(u, centres)
+
+    def loss(self, theta: torch.Tensor, pixels: torch.Tensor, offsets: torch.Tensor,
+             quantiles: torch.Tensor, centres: torch.Tensor | None) -> torch.Tensor:
+        """The loss of one batch (the sum of :meth:`terms`, same arguments), differentiable in
+        ``theta``; dimensionless."""
+        return sum(self.terms(theta, pixels, offsets, quantiles, centres))
 
     def __call__(self, theta, iteration: int, rng: np.random.Generator):
         rep, renderer = self.rep, self.rep.renderer
@@ -209,9 +227,11 @@ class StochasticObjective:
         if self.centre_regularizer is not None:
             centres = torch.as_tensor(rng.choice(self.centre_regularizer.n_centres,
                                                  rep.batch_centres, replace=False))
-        loss = self.loss(theta, pixels, offsets, quantiles, centres)
-        loss.backward()
-        return loss.item(), to_numpy(theta.grad)
+        value = 0.0
+        for term in self.terms(theta, pixels, offsets, quantiles, centres):
+            term.backward()
+            value += term.item()
+        return value, to_numpy(theta.grad)
 
 
 class NeuralFieldRepresentation(Representation):
@@ -225,8 +245,8 @@ class NeuralFieldRepresentation(Representation):
     n_coarse, n_fine : int, optional
         Samples per sub-ray (defaults 64 and 64), see :class:`NeuralRenderer`.
     batch_rays : int, optional
-        Pixels (measured rays) per training iteration and per rendering call, each rendered
-        with all its sub-rays (default 1024).
+        Pixels (measured rays) per training iteration, each rendered with all its sub-rays
+        (default 1024).
     batch_centres : int, optional
         Voxel centres per iteration for the regularizer estimate (default 4096).
     n_frequencies, hidden, depth : int, optional
@@ -236,19 +256,23 @@ class NeuralFieldRepresentation(Representation):
         pixel order of every epoch.
     opacity : PlanckMeanOpacity, optional
         See :class:`NeuralRenderer`.
+    chunk_rays : int, optional
+        Pixels per rendering call, see :class:`NeuralRenderer` (default from the memory of
+        a call).
     """
 
     kind = "neural-field"
 
     def __init__(self, scene, n_coarse: int = 64, n_fine: int = 64, batch_rays: int = 1024,
                  batch_centres: int = 4096, n_frequencies: int = 10, hidden: int = 64,
-                 depth: int = 4, seed: int = 0, opacity: PlanckMeanOpacity | None = None):
+                 depth: int = 4, seed: int = 0, opacity: PlanckMeanOpacity | None = None,
+                 chunk_rays: int | None = None):
         if batch_centres < 1:
             raise ValueError(f"batch_centres must be >= 1; got {batch_centres}")
         self.scene = scene
         self.grid = scene.grid
         self.seed = int(seed)
-        self.renderer = NeuralRenderer(scene, n_coarse, n_fine, batch_rays, opacity)
+        self.renderer = NeuralRenderer(scene, n_coarse, n_fine, batch_rays, opacity, chunk_rays)
         network = partial(FieldNetwork.for_scene, scene, n_frequencies, hidden, depth)
         self.coarse, self.fine = network(seed=seed), network(seed=seed + 1)
         self.n_parameters = self.coarse.n_parameters + self.fine.n_parameters

@@ -56,7 +56,8 @@ def test_defaults_and_partial_override(tmp_path):
          r"'noise.nesr' = 'no_such_nesr.txt' is neither a number nor an existing file"),
         ("[rig]\ndistance = 0\n", r"'rig.distance' \(m\) must be a positive number, got 0.0; "
                                 r"the default is `distance = 1.5` in \[rig\]$"),
-        ("[regularizer]\ntau = 0\n", r"'regularizer.tau' must be positive: at least 1, got 0.0"),
+        ("[regularizer]\ntau = 0\n",
+         r"'regularizer.tau' must be positive: at least 1 or 'model-error', got 0.0"),
         ("[regularizer]\nlambda = 'discrepncy'\n",
          r"'regularizer.lambda' = 'discrepncy' is not allowed \(did you mean 'discrepancy'\?\); "
          r"allowed: a non-negative number or 'discrepancy'"),

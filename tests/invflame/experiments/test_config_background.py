@@ -54,9 +54,8 @@ def test_a_soot_layer_in_the_truth_is_seen_in_the_synthetic_data():
     plain = config.validate(SMALL)
     sooty = config.validate({**SMALL, "truth": {**SMALL["truth"], "soot": 1e-6}})
     scene = runner.build_scene(plain)
-    truth = make_phantom("synthetic")
-    clean = runner.measure(plain, scene, truth)
-    with_soot = runner.measure(sooty, scene, truth)
+    clean = runner.measure(plain, scene, runner.load_truth(plain))
+    with_soot = runner.measure(sooty, scene, runner.load_truth(sooty))
     assert clean.provenance["soot_peak_volume_fraction"] == 0.0
     assert with_soot.provenance["soot_peak_volume_fraction"] == 1e-6
     assert scene.soot is None  # the reconstruction models gas only

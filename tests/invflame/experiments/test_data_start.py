@@ -172,3 +172,31 @@ def test_bad_tomography_and_state_input_are_clear_errors(scene):
         ds.channel_emission(scene, np.zeros((3, 5)))
     with pytest.raises(ValueError, match="min_ratio"):
         ds.thin_channels(scene, 1.0, ds.lean_branch()[1], min_ratio=1.5)
+
+
+def test_masked_pixels_and_wavenumbers_are_left_out(scene):
+    """A masked value does not reach the start: garbage there gives the same start, which
+    still beats ambient air; a mask that leaves no pixel whole is refused."""
+    truth = make_phantom("synthetic", grid=scene.grid).values.astype(np.float64)
+    clean = np.asarray(scene.simulate(truth), np.float64)
+    noise = 1e-3 * clean.max()
+    data = clean + noise * np.random.default_rng(2).standard_normal(clean.shape)
+    sigma = np.full(data.shape, noise)
+    sigma[::7] = np.inf  # bad pixels
+    sigma[:, 3] = np.inf  # a bad wavenumber
+    sigma[5, 10] = np.inf  # one bad value
+    start = ds.band_tomography_start(scene, data, sigma, ambient=DRY_AIR)
+    garbage = np.where(np.isfinite(sigma), data, 1e3)
+    np.testing.assert_array_equal(ds.band_tomography_start(scene, garbage, sigma,
+                                                           ambient=DRY_AIR), start)
+    error = normalized_mse(truth, start)["T"]
+    assert error < 0.5 * normalized_mse(truth, ambient(scene.grid.shape))["T"]
+    unknown_noise = ds.band_tomography_start(scene, garbage, ambient=DRY_AIR,
+                                             measured=np.isfinite(sigma))
+    assert normalized_mse(truth, unknown_noise)["T"] < 0.5 * normalized_mse(
+        truth, ambient(scene.grid.shape))["T"]
+    sigma[:, ::2] = np.inf
+    sigma[::2, 1::2] = np.inf
+    sigma[1::2, 1::2] = np.inf
+    with pytest.raises(ValueError, match="no pixel measured in every channel"):
+        ds.band_tomography_start(scene, data, sigma, ambient=DRY_AIR)

@@ -82,3 +82,20 @@ def test_the_summary_says_a_run_was_resumed_inexactly(tmp_path):
     assert summary["resumed"] == {"from_iteration": 3, "exact": False, "forced": False,
                                   "changed": []}
     assert summary["iterations"] > 3
+
+
+def test_resume_of_a_finished_run_checks_truth_and_code_not_only_the_configuration(tmp_path):
+    cfg = config.validate(dict(TINY, solver=dict(TINY["solver"], iterations=2)))
+    finished = runner.run_experiment(cfg, tmp_path, progress=False)
+    assert runner.run_experiment(cfg, tmp_path, resume=True, progress=False) == finished
+    saved = json.loads((tmp_path / "fingerprint.json").read_text())
+    tampered = dict(saved, **{"truth sha256": "0" * 64, "invflame version": "0.0.1"})
+    (tmp_path / "fingerprint.json").write_text(json.dumps(tampered))
+    with pytest.raises(config.ConfigError) as err:
+        runner.run_experiment(cfg, tmp_path, resume=True, progress=False)
+    message = str(err.value)
+    assert f"truth sha256: '{'0' * 64}' there, '{saved['truth sha256']}' now" in message
+    assert "invflame version: '0.0.1' there" in message
+    assert "data sha256" not in message  # simulated data follow from what is checked
+    forced = runner.run_experiment(cfg, tmp_path, resume=True, progress=False, force=True)
+    assert forced == finished

@@ -5,13 +5,14 @@ import os
 import socket
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from invflame.atomic_files import CorruptFileError
 from invflame.errors import GeometryError, OutputError
-from invflame.experiments import config, runner, summaries
+from invflame.experiments import config, run_folder, runner, summaries
 from invflame.experiments.run_folder import INCOMPLETE, LOCK, RunLock
 from invflame.field import Field
 from invflame.geometry import CameraRig, VoxelGrid
@@ -49,12 +50,26 @@ def test_a_stale_lock_is_taken_over_with_a_warning(tmp_path, caplog):
     pid = dead_pid()
     (tmp_path / LOCK).write_text(f"{pid}\n")
     with caplog.at_level(logging.WARNING), RunLock(tmp_path) as lock:
-        assert (tmp_path / LOCK).read_text() == f"{os.getpid()}\n{socket.gethostname()}\n"
+        pid_text, host, started, _ = (tmp_path / LOCK).read_text().split("\n")
+        assert (pid_text, host) == (str(os.getpid()), socket.gethostname())
+        assert started == run_folder._started(os.getpid())
         assert (tmp_path / INCOMPLETE).is_file()
         lock.complete()
     assert [r.getMessage() for r in caplog.records] == [
         f"taking over the lock {tmp_path / LOCK} of process {pid}, which no longer runs"]
     assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").is_file(), reason="no /proc start times")
+def test_a_lock_whose_process_id_was_reused_is_taken_over(tmp_path, caplog):
+    started = run_folder._started(os.getpid())
+    assert started.isdigit()
+    pid = os.getpid()  # alive, but started at another time than the lock records
+    (tmp_path / LOCK).write_text(f"{pid}\n{socket.gethostname()}\n{int(started) + 1}\n")
+    with caplog.at_level(logging.WARNING), RunLock(tmp_path):
+        assert (tmp_path / LOCK).read_text().split("\n")[2] == started
+    assert [r.getMessage() for r in caplog.records] == [
+        f"taking over the lock {tmp_path / LOCK} of process {pid}, which no longer runs"]
 
 
 def test_a_lock_of_another_host_is_never_taken_over(tmp_path):

@@ -152,3 +152,29 @@ def test_rig_with_mixed_image_shapes():
         rig.to_images(np.arange(19))
     with pytest.raises(ValueError, match="PinholeCamera"):
         CameraRig(())
+
+
+def test_sub_rays_tile_each_pixel_and_are_pixel_major():
+    camera = PinholeCamera((0.0, 0.0, -2.0), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 1.0, (0.4, 0.2),
+                           (4, 2))
+    _, centre = camera.rays()
+    _, sub = camera.rays(9)
+    assert sub.shape == (8 * 9, 3)
+    # the sub-rays of one pixel project inside that pixel, around its centre ray
+    u, v, _ = camera.project(camera.position + sub)
+    pixel_u, pixel_v = np.floor(u).reshape(8, 9), np.floor(v).reshape(8, 9)
+    np.testing.assert_array_equal(pixel_u, np.tile(np.arange(4), 2)[:, None].repeat(9, 1))
+    np.testing.assert_array_equal(pixel_v, np.repeat(np.arange(2), 4)[:, None].repeat(9, 1))
+    # stratified: offsets 1/6, 1/2, 5/6 of a pixel along each side
+    np.testing.assert_allclose(np.sort(np.unique(np.round(u[:9] % 1, 12))), [1 / 6, 0.5, 5 / 6])
+    uc, vc, _ = camera.project(camera.position + centre)
+    np.testing.assert_allclose(u.reshape(8, 9)[:, 4], uc, atol=1e-12)
+    np.testing.assert_allclose(v.reshape(8, 9)[:, 4], vc, atol=1e-12)
+
+
+@pytest.mark.parametrize("bad", [2, 0, 8, 3.0])
+def test_rays_per_pixel_must_be_a_square(bad):
+    camera = PinholeCamera((0.0, 0.0, -2.0), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 1.0, (0.4, 0.4),
+                           (2, 2))
+    with pytest.raises(ValueError, match="perfect square"):
+        camera.rays(bad)
