@@ -386,6 +386,12 @@ def api_cases() -> list[Case]:
             fields(f0=np.nan), np.zeros(scene.operator.dimsd)), ("NaN", "T")),
         Case("linearize at X_H2O = 1.5", lambda w: scene.operator.linearize(fields(f2=1.5)),
              ("H2O",)),
+        Case("EmissionRTE at T = 5000 K", lambda w: scene.emission(
+            scene.sampling(good) * np.array([5.0, 1, 1, 1])[:, None, None]),
+            ("temperature", "5000")),
+        Case("EmissionRTE X_CO2 = -0.5", lambda w: scene.emission(
+            scene.sampling(good) - np.array([0, 0.6, 0, 0])[:, None, None]),
+            ("mole fraction", "negative")),
         Case("rig that misses the grid", lambda w: Scene(grid, CameraRig((away,)), table),
              ("grid", "camera")),
         Case("paper_rig inside the grid", lambda w: paper_rig(grid, distance=0.2),

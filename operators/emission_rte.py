@@ -226,6 +226,28 @@ class EmissionRTE(KernelOperator):
             self.background = check_background(tables, background, n_rays)
         super().__init__(_radiance_of_fields, (tables, self.lengths, self.background), batch_rays,
                          (tables.n_fields, n_rays, n_seg), (n_rays, tables.n_eta), dtype,
-                         "EmissionRTE")
+                         "EmissionRTE", domain=self._check_segments)
+        self._traversed = lengths > 0
+        self._t_range = float(tables.nodes[0]), float(tables.nodes[-1])
         self.kernel = partial(emission_radiance, tables, batch_rays=batch_rays,
                               background=self.background)
+
+    def _check_segments(self, fields) -> None:
+        """Refuse segment fields the tables cannot evaluate: on the segments of non-zero
+        length, non-finite values, temperatures outside the tables' nodes (K, up to the
+        fields' rounding) and negative mole or volume fractions (padding is not looked at)."""
+        fields = np.asarray(fields)[:, self._traversed]
+        names = ["T", *(f"mole fraction (field {i + 1})" for i in range(self.tables.n_species)),
+                 *(["soot volume fraction"] if self.tables.soot else [])]
+        for name, values in zip(names, fields, strict=True):
+            if not np.isfinite(values).all():
+                raise ValueError(f"{self.name}: the {name} field holds NaN or inf")
+        t_min, t_max = self._t_range
+        eps = np.finfo(fields.dtype).eps if np.issubdtype(fields.dtype, np.floating) else 0.0
+        if fields[0].min() < t_min * (1 - eps) or fields[0].max() > t_max * (1 + eps):
+            raise ValueError(f"{self.name}: temperature spans {fields[0].min():g}-"
+                             f"{fields[0].max():g} K, outside the tables' {t_min:g}-{t_max:g} K")
+        for name, values in zip(names[1:], fields[1:], strict=True):
+            if values.min() < 0:
+                raise ValueError(f"{self.name}: the {name} field is negative (minimum "
+                                 f"{values.min():g}); fractions must be >= 0")

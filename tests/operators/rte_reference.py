@@ -85,3 +85,11 @@ def random_rays(n_rays=7, n_seg=9, seed=1, t_range=(350.0, 2300.0)):
     lengths[pad] = 0.0
     fields[0][pad] = np.broadcast_to(fields[0][:, :1], pad.shape)[pad]
     return fields, lengths
+
+
+def physical_direction(fields, seed=4):
+    """A Taylor-test direction along which ``fields + h·direction`` stays physical for h ≤ 1:
+    T moves by up to 30 K, each mole or volume fraction by up to half its own value (the
+    emission operator refuses negative fractions)."""
+    shape = np.random.default_rng(seed).uniform(-1.0, 1.0, fields.shape)
+    return np.concatenate([30.0 * shape[:1], 0.5 * fields[1:] * shape[1:]])
