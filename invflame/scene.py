@@ -438,12 +438,7 @@ class Scene:
             soot = "with" if self.soot_input else "without"
             raise ValueError(f"fields must have shape {self.field_shape} (a scene {soot} soot "
                              f"as an input field), got {fields.shape}")
-        t_min, t_max = float(self.table.temperatures[0]), float(self.table.temperatures[-1])
-        # the bounds as the fields' own precision rounds them (a float32 solver's bound)
-        eps = np.finfo(fields.dtype).eps if np.issubdtype(fields.dtype, np.floating) else 0.0
-        if fields[0].min() < t_min * (1 - eps) or fields[0].max() > t_max * (1 + eps):
-            raise ValueError(f"temperature spans {fields[0].min():g}-{fields[0].max():g} K, "
-                             f"outside the absorption table's {t_min:g}-{t_max:g} K")
+        self.tables.check_temperature(fields[0], "Scene")
         return fields
 
     def to_images(self, values) -> np.ndarray:

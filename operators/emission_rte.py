@@ -228,7 +228,6 @@ class EmissionRTE(KernelOperator):
                          (tables.n_fields, n_rays, n_seg), (n_rays, tables.n_eta), dtype,
                          "EmissionRTE", domain=self._check_segments)
         self._traversed = lengths > 0
-        self._t_range = float(tables.nodes[0]), float(tables.nodes[-1])
         self.kernel = partial(emission_radiance, tables, batch_rays=batch_rays,
                               background=self.background)
 
@@ -242,11 +241,7 @@ class EmissionRTE(KernelOperator):
         for name, values in zip(names, fields, strict=True):
             if not np.isfinite(values).all():
                 raise ValueError(f"{self.name}: the {name} field holds NaN or inf")
-        t_min, t_max = self._t_range
-        eps = np.finfo(fields.dtype).eps if np.issubdtype(fields.dtype, np.floating) else 0.0
-        if fields[0].min() < t_min * (1 - eps) or fields[0].max() > t_max * (1 + eps):
-            raise ValueError(f"{self.name}: temperature spans {fields[0].min():g}-"
-                             f"{fields[0].max():g} K, outside the tables' {t_min:g}-{t_max:g} K")
+        self.tables.check_temperature(fields[0], self.name)
         for name, values in zip(names[1:], fields[1:], strict=True):
             if values.min() < 0:
                 raise ValueError(f"{self.name}: the {name} field is negative (minimum "

@@ -199,6 +199,31 @@ class RTETables:
         """Number of wavenumbers."""
         return self.wavenumber.shape[0]
 
+    def check_temperature(self, temperature, where: str) -> None:
+        """Refuse temperatures the tables do not cover.
+
+        Parameters
+        ----------
+        temperature : array_like
+            Temperatures in K. A value may pass the first or last node by its own rounding
+            (one machine epsilon, relative), as a float32 solver's bound does.
+        where : str
+            Names the caller in the message.
+
+        Raises
+        ------
+        ValueError
+            If a temperature lies outside the nodes' range, naming the span and the range.
+        """
+        temperature = np.asarray(temperature)
+        t_min, t_max = float(self.nodes[0]), float(self.nodes[-1])
+        eps = (np.finfo(temperature.dtype).eps
+               if np.issubdtype(temperature.dtype, np.floating) else 0.0)
+        low, high = float(temperature.min()), float(temperature.max())
+        if low < t_min * (1 - eps) or high > t_max * (1 + eps):
+            raise ValueError(f"{where}: temperature spans {low:g}-{high:g} K, outside the "
+                             f"absorption tables' {t_min:g}-{t_max:g} K")
+
 
 def _restrict(nodes, coef, fine):
     """Coefficients of a piecewise cubic on ``nodes`` re-expanded on the refinement ``fine``.

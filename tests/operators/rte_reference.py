@@ -7,6 +7,7 @@ time, exact Planck radiance and the cross-section spline evaluated by
 
 import numpy as np
 
+import operators as op
 from operators.planck import BOLTZMANN, planck
 from operators.tabulated import PiecewiseCubic
 
@@ -93,3 +94,13 @@ def physical_direction(fields, seed=4):
     emission operator refuses negative fractions)."""
     shape = np.random.default_rng(seed).uniform(-1.0, 1.0, fields.shape)
     return np.concatenate([30.0 * shape[:1], 0.5 * fields[1:] * shape[1:]])
+
+
+def check_derivatives(rte, fields, rtol):
+    """Assert the exact derivatives of ``rte`` at ``fields``: the Jacobian's dot test within
+    ``rtol`` and a Taylor test along :func:`physical_direction` with rates 1 and 2."""
+    dot = op.jacobian_dottest(rte, fields, rtol=rtol)
+    assert dot.passed, dot
+    taylor = op.taylor_test(rte, fields, physical_direction(fields), h0=1.0)
+    assert taylor.passed, taylor
+    assert abs(taylor.rate0 - 1) < 0.05 and taylor.rate1 > 1.9
