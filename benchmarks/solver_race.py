@@ -2,7 +2,8 @@
 
 Usage: python benchmarks/solver_race.py [--size quick|paper] [--protocol paper|honest]
        [--regularizer tikhonov|tv|both] [--solvers NAME ...] [--budget-s 90]
-       [--clock cpu|wall] [--reference-iterations N] [--out results/solver_race]
+       [--clock cpu|wall] [--reference-iterations N] [--lam KIND=VALUE ...]
+       [--out results/solver_race]
        python benchmarks/solver_race.py --merge DIR ... --out DIR
 
 The problems are the voxel methods VG/Tikh. and VG/TV of ``invflame reproduce`` (protocol
@@ -180,8 +181,13 @@ class Trace(solvers.Callback):
             self.overhead[key] += read() - now[key]
 
 
-def build_problems(size: str, protocol: str, regularizers: list[str]) -> dict:
+def build_problems(size: str, protocol: str, regularizers: list[str],
+                   lams: dict[str, float] | None = None) -> dict:
     """The race's problems sharing one measurement, start and truth.
+
+    ``lams`` (regularizer kind → λ on the configured scale) replaces the protocol's λ; it is
+    needed where the protocol chooses λ from the data by a rule (the honest voxel rows), since
+    a race compares solvers on one fixed problem.
 
     Returns
     -------
@@ -200,9 +206,14 @@ def build_problems(size: str, protocol: str, regularizers: list[str]) -> dict:
     for kind in regularizers:
         cfg = reproduce.method_config(size, METHODS[kind], 0, protocol)
         reg = cfg["regularizer"]
+        lam = (lams or {}).get(kind, reg["lambda"])
+        if isinstance(lam, str):
+            raise SystemExit(f"the {protocol} protocol chooses the {kind} weight by the rule "
+                             f"{lam!r}; race a fixed one: --lam {kind}=VALUE (e.g. the λ the "
+                             "rule chose in the run's lambda_choice.json)")
         problems[METHODS[kind]] = representation.problem(
             measurement.data, regularizer=kind, x0=x0,
-            lam=regularizer_weight(cfg, scene, measurement, reg["lambda"]),
+            lam=regularizer_weight(cfg, scene, measurement, lam),
             sigma=measurement.sigma if reg["scaling"] == "chi2" else None)
 
     def mse_t(x):
@@ -383,7 +394,7 @@ def run_race(args, variants: dict) -> dict:
     saved to ``race.json`` in ``args.out`` after every run (a killed race leaves what it did)."""
     regularizers = ["tikhonov", "tv"] if args.regularizer == "both" else [args.regularizer]
     began = time.perf_counter()
-    built = build_problems(args.size, args.protocol, regularizers)
+    built = build_problems(args.size, args.protocol, regularizers, args.lam)
     n_ref = args.reference_iterations or built["iterations"]
     reference = f"adam lr={built['lr']:g} (reference)"
     record = {"size": args.size, "protocol": args.protocol, "clock": args.clock,
@@ -463,8 +474,19 @@ def main():
     parser.add_argument("--merge", type=Path, nargs="+", default=None, metavar="DIR",
                         help="race nothing: report the races in these --out folders as one "
                              "(e.g. one regularizer each, run side by side)")
+    parser.add_argument("--lam", nargs="+", default=[], metavar="KIND=VALUE",
+                        help="fixed λ per regularizer (e.g. tv=1e4), replacing the protocol's; "
+                             "needed for the honest protocol, whose voxel rows choose λ by a "
+                             "rule")
     parser.add_argument("--out", type=Path, default=Path("results/solver_race"))
     args = parser.parse_args()
+    try:
+        args.lam = {kind: float(value) for kind, value in
+                    (item.split("=", 1) for item in args.lam)}
+    except ValueError:
+        parser.error(f"--lam takes KIND=VALUE pairs with KIND tikhonov or tv, got {args.lam}")
+    if set(args.lam) - {"tikhonov", "tv"}:
+        parser.error(f"--lam: unknown regularizer in {sorted(args.lam)}; use tikhonov or tv")
     if args.merge:
         report(merged([json.loads((d / "race.json").read_text()) for d in args.merge]),
                args.out)

@@ -18,7 +18,8 @@ Protocols
     What a researcher with real cameras can do (``invflame study``): start from the data
     (band-integrated tomography, :mod:`invflame.experiments.data_start`), data rendered on the
     truth's native grid with more sub-rays and a finer line-by-line step plus FTIR noise
-    (:mod:`invflame.experiments.measurement`), λ on the noise-weighted scale
+    (:mod:`invflame.experiments.measurement`), λ on the noise-weighted scale, chosen from the
+    data for the voxel rows (:data:`HONEST_RULE`) and fixed for the neural ones
     (:data:`HONEST_LAMBDA`), each method run until its objective stops falling
     (:data:`HONEST_SOLVERS`), and the table says how many iterations that took.
 
@@ -84,12 +85,23 @@ pixel batches, as the paper trains it, stopped when it falls by less than 0.1 % 
 iterations (pixel batches)."""
 
 HONEST_LAMBDA = {"none": 0.0, "tikhonov": 1.0, "tv": 30.0}
-r"""λ of the honest protocol per regularizer, on the noise-weighted scale
-(:math:`\chi^2/M + \lambda\Phi`), chosen on the synthetic plume, never on the pool fire:
-TV's is the best of a sweep over 3, 10, 30, 100 at the quick size (``docs/honest.md``);
+r"""Fixed λ of the honest protocol's neural rows per regularizer, on the noise-weighted scale
+(:math:`\chi^2/M + \lambda\Phi`), chosen on the synthetic plume, never on the pool fire: TV's
+is the best of a voxel sweep over 3, 10, 30, 100 at the quick size (``docs/honest.md``);
 Tikhonov's makes :math:`\lambda\Phi` of the plume's true fields (Φ ≈ 13 m⁻², against
-0.62 m⁻¹ for TV) of the same order as TV's. ``invflame run`` with ``lambda = "discrepancy"``
-chooses it from the data instead."""
+0.62 m⁻¹ for TV) of the same order as TV's. The voxel rows choose λ from the data instead
+(:data:`HONEST_RULE`); a network would be trained once per trial λ, which the quick preset
+cannot afford."""
+
+HONEST_RULE = {"lambda": "discrepancy", "tau": "model-error"}
+"""How the honest protocol's regularized voxel rows choose λ: the discrepancy principle with
+τ = 1 + the model error of prior flames (:mod:`invflame.experiments.model_error`), which needs
+no truth."""
+
+HONEST_LAMBDA_RANGE = {"tikhonov": [0.1, 1e4], "tv": [1.0, 1e5]}
+"""The range (1/Φ) in which :data:`HONEST_RULE` searches, per regularizer: from over-smoothing
+down to below the fixed λ of :data:`HONEST_LAMBDA`, ten-fold steps, so that a ladder of at
+most six solves brackets the choice."""
 
 PROTOCOLS = {
     "paper": {"init": {"kind": "noisy-truth", "noise": 0.2}, "rig": {"rays_per_pixel": 1},
@@ -147,6 +159,8 @@ def method_config(preset: str, method: str, seed: int = 0, protocol: str = "pape
     else:
         solver = HONEST_SOLVERS[representation]
         weight = {"lambda": HONEST_LAMBDA[regularizer], "scaling": "chi2"}
+        if representation == "voxel" and regularizer != "none":
+            weight.update(HONEST_RULE, lambda_range=HONEST_LAMBDA_RANGE[regularizer])
         epochs = honest_epochs.get(representation, epochs)
     settings.update({
         "seed": seed,
@@ -180,6 +194,7 @@ def table_rows(summaries: dict[str, dict]) -> list[dict]:
         rows.append({
             **_scores_row(method, summary, "method"),
             "lambda": summary["lambda"],
+            "lambda_from_data": isinstance(summary["config"]["regularizer"]["lambda"], str),
             "iterations": summary["iterations"],
             "converged": summary["converged"],
             "chi2_per_measurement": summary["chi2_per_measurement"]["final"],
@@ -228,7 +243,9 @@ def markdown_table(rows: list[dict], baselines: list[dict], preset: str, protoco
         "",
         *(f"- {what}: {how}" for what, how in described.items() if what != "lambda"),
         "",
-        "λ: the regularizer's weight (on the scale of the run's `regularizer.scaling`). "
+        "λ: the regularizer's weight (on the scale of the run's `regularizer.scaling`; "
+        "marked * where the run chose it from the data by the discrepancy principle, its "
+        "trials in the run's `lambda_choice.json`). "
         "MSE over voxel centres, each field min–max normalized by the ground truth's range; "
         "MSE_T flame: the same over the voxels above 500 K in the truth or the estimate; hot "
         "vol.: volume above 500 K over the truth's (near 0: the flame was lost); gain: MSE_T "
@@ -242,7 +259,8 @@ def markdown_table(rows: list[dict], baselines: list[dict], preset: str, protoco
     ]
     for r in rows:
         lines.append(
-            f"| {r['method']} | {r['lambda']:g} | {r['iterations']} | {_cell(r['converged'])} | "
+            f"| {r['method']} | {r['lambda']:.3g}{'*' if r['lambda_from_data'] else ''} | "
+            f"{r['iterations']} | {_cell(r['converged'])} | "
             f"{_cell(r['chi2_per_measurement'], '.3g')} | {_cell(r['MSE_T'])} | "
             f"{_cell(r['MSE_T_flame'])} | {_cell(r['MSE_CO2'])} | {_cell(r['MSE_H2O'])} | "
             f"{_cell(r['hot_volume_ratio'], '.2f')} | {_cell(r['MSE_T_initial'])} | "

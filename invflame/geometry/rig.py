@@ -86,6 +86,71 @@ class CameraRig:
         return np.stack(self.split_images(values))
 
 
+PAPER_AZIMUTHS = (0.0, 180.0, 90.0, 270.0)
+"""Azimuths of the study's four cameras (degrees, see :func:`ring_rig`): two viewing axes."""
+
+
+def ring_rig(
+    grid: VoxelGrid,
+    azimuths,
+    distance: float = 1.5,
+    n_pixels: int = 32,
+    focal_length: float = 0.59,
+    margin: float = 0.02,
+) -> CameraRig:
+    r"""Cameras on a horizontal circle around the domain, each looking at its centre.
+
+    Camera ``i`` sits at ``distance`` from the box centre in the direction
+    :math:`\cos\phi_i\,e_a + \sin\phi_i\,e_b`, with :math:`\phi_i` = ``azimuths[i]``
+    and :math:`e_a, e_b` the unit vectors of the two horizontal axes, a < b (x and z for a
+    y-up grid), with the grid's up axis as up. All cameras share one square sensor, the
+    smallest that frames the whole box from every camera, enlarged by ``margin`` on each
+    side. Cameras opposite each other (azimuths 180° apart) see the same line integrals, so
+    the number of distinct viewing axes, not of cameras, limits what the rig resolves.
+
+    Parameters
+    ----------
+    grid : VoxelGrid
+        Domain to look at.
+    azimuths : sequence of float
+        Camera azimuths in degrees, from :math:`e_a` towards :math:`e_b`.
+    distance : float, optional
+        Camera distance from the box centre in m.
+    n_pixels : int, optional
+        Pixels per side (square images).
+    focal_length : float, optional
+        Focal length in m.
+    margin : float, optional
+        Relative margin around the projected box (unitless).
+    """
+    azimuths = np.radians(np.asarray(azimuths, dtype=np.float64))
+    if azimuths.ndim != 1 or azimuths.size == 0 or not np.all(np.isfinite(azimuths)):
+        raise ValueError(f"azimuths must be a non-empty sequence of finite angles in degrees, "
+                         f"got {np.degrees(azimuths)!r}")
+    centre = grid.centre
+    up = np.eye(3)[grid.up_axis]
+    first, second = (a for a in range(3) if a != grid.up_axis)
+    reach = max(grid.extent[a] / 2 for a in (first, second))
+    if not distance > reach:
+        raise GeometryError(f"camera distance {distance:g} m puts the cameras inside the grid "
+                            f"(it reaches {reach:g} m from its centre on the horizontal axes): "
+                            f"use a distance above {reach:g} m (the paper's 1.5)")
+    # rounded so that the axis-aligned azimuths give exact unit vectors
+    cos, sin = np.round(np.cos(azimuths), 14), np.round(np.sin(azimuths), 14)
+    positions = [centre + distance * (c * np.eye(3)[first] + s * np.eye(3)[second])
+                 for c, s in zip(cos, sin, strict=True)]
+    corners = grid.corners()
+    sensor = max(
+        max(framing_sensor_size(p, centre, up, focal_length, corners, margin)) for p in positions
+    )
+    return CameraRig(
+        tuple(
+            PinholeCamera(p, centre, up, focal_length, (sensor, sensor), (n_pixels, n_pixels))
+            for p in positions
+        )
+    )
+
+
 def paper_rig(
     grid: VoxelGrid,
     distance: float = 1.5,
@@ -93,7 +158,8 @@ def paper_rig(
     focal_length: float = 0.59,
     margin: float = 0.02,
 ) -> CameraRig:
-    """Four cameras around the domain, as in the flame-tomography study.
+    """Four cameras around the domain, as in the flame-tomography study: :func:`ring_rig` at
+    :data:`PAPER_AZIMUTHS`.
 
     Cameras sit at ``distance`` from the box centre on the + and − directions of the two
     horizontal axes (x and z for a y-up grid), in the order +a, −a, +b, −b where a < b are
@@ -106,33 +172,7 @@ def paper_rig(
 
     Parameters
     ----------
-    grid : VoxelGrid
-        Domain to look at.
-    distance : float, optional
-        Camera distance from the box centre in m.
-    n_pixels : int, optional
-        Pixels per side (square images).
-    focal_length : float, optional
-        Focal length in m.
-    margin : float, optional
-        Relative margin around the projected box (unitless).
+    grid, distance, n_pixels, focal_length, margin
+        As for :func:`ring_rig` (m, pixels per side, m, unitless).
     """
-    centre = grid.centre
-    up = np.eye(3)[grid.up_axis]
-    horizontal = [a for a in range(3) if a != grid.up_axis]
-    reach = max(grid.extent[a] / 2 for a in horizontal)
-    if not distance > reach:
-        raise GeometryError(f"camera distance {distance:g} m puts the cameras inside the grid "
-                            f"(it reaches {reach:g} m from its centre on the horizontal axes): "
-                            f"use a distance above {reach:g} m (the paper's 1.5)")
-    positions = [centre + sign * distance * np.eye(3)[a] for a in horizontal for sign in (1, -1)]
-    corners = grid.corners()
-    sensor = max(
-        max(framing_sensor_size(p, centre, up, focal_length, corners, margin)) for p in positions
-    )
-    return CameraRig(
-        tuple(
-            PinholeCamera(p, centre, up, focal_length, (sensor, sensor), (n_pixels, n_pixels))
-            for p in positions
-        )
-    )
+    return ring_rig(grid, PAPER_AZIMUTHS, distance, n_pixels, focal_length, margin)

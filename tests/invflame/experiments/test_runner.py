@@ -176,3 +176,27 @@ def test_resume_refuses_another_configuration(tmp_path):
                                                  r"regularizer.lambda"):
         runner.run_experiment(other, tmp_path, resume=True, progress=False)
     assert runner.run_experiment(tiny(), tmp_path, resume=True, progress=False)["iterations"] == 6
+
+
+def test_honest_voxel_rows_choose_lambda_from_the_data_and_neural_rows_keep_a_fixed_one():
+    for method, (kind, regularizer) in reproduce.METHODS.items():
+        reg = reproduce.method_config("quick", method, protocol="honest")["regularizer"]
+        if kind == "voxel" and regularizer != "none":
+            assert (reg["lambda"], reg["tau"]) == ("discrepancy", "model-error"), method
+            low, high = reg["lambda_range"]
+            assert low < reproduce.HONEST_LAMBDA[regularizer] < high
+        else:
+            assert reg["lambda"] == reproduce.HONEST_LAMBDA[regularizer], method
+    paper = reproduce.method_config("quick", "VG/TV", protocol="paper")["regularizer"]
+    assert paper["lambda"] == 1e-3
+
+
+def test_table_marks_the_lambdas_chosen_from_the_data():
+    row = {"method": "VG/TV", "iterations": 5, "converged": True, "chi2_per_measurement": 2.0,
+           "MSE_T": 0.01, "MSE_T_flame": 0.1, "MSE_CO2": 0.01, "MSE_H2O": 0.01,
+           "hot_volume_ratio": 1.0, "MSE_T_initial": 0.02, "improvement_T": 2.0,
+           "epoch_ms": 10.0, "paper_MSE_T": 0.0121}
+    rows = [dict(row, **{"lambda": 1.0e4, "lambda_from_data": True}),
+        dict(row, method="NN/TV", **{"lambda": 30.0, "lambda_from_data": False})]
+    text = reproduce.markdown_table(rows, [], "quick", "honest", {})
+    assert "| VG/TV | 1e+04* |" in text and "| NN/TV | 30 |" in text

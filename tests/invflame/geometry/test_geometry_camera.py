@@ -3,7 +3,15 @@
 import numpy as np
 import pytest
 
-from invflame.geometry import CameraRig, PinholeCamera, VoxelGrid, framing_sensor_size, paper_rig
+from invflame.errors import GeometryError
+from invflame.geometry import (
+    CameraRig,
+    PinholeCamera,
+    VoxelGrid,
+    framing_sensor_size,
+    paper_rig,
+    ring_rig,
+)
 
 
 @pytest.fixture
@@ -123,6 +131,26 @@ def test_paper_rig_layout():
         u, v, _ = cam.project(grid.corners())
         assert u.min() > 0 and v.min() > 0 and u.max() < 32 and v.max() < 32
         np.testing.assert_allclose([u.min(), u.max()], [16 - 16 / 1.02, 16 + 16 / 1.02])
+
+
+def test_ring_rig_places_cameras_at_the_azimuths_framing_the_box():
+    grid = VoxelGrid.poolfire(10)
+    rig = ring_rig(grid, (0, 45, 90, 135), n_pixels=8)
+    offsets = np.array([c.position for c in rig.cameras]) - grid.centre
+    half = 1.5 / np.sqrt(2)
+    np.testing.assert_allclose(offsets, [[1.5, 0, 0], [half, 0, half], [0, 0, 1.5],
+                                         [-half, 0, half]], atol=1e-12)
+    sizes = {c.sensor_size for c in rig.cameras}
+    assert len(sizes) == 1  # one sensor for all
+    # the diagonal cameras see the box's nearest vertical edge: a wider sensor than the paper's
+    assert sizes.pop()[0] > paper_rig(grid).cameras[0].sensor_size[0]
+    for cam in rig.cameras:
+        u, v, _ = cam.project(grid.corners())
+        assert u.min() >= 0 and v.min() >= 0 and u.max() <= 8 and v.max() <= 8
+    with pytest.raises(ValueError, match="azimuths must be a non-empty"):
+        ring_rig(grid, [])
+    with pytest.raises(GeometryError, match="inside the grid"):
+        ring_rig(grid, (0, 90), distance=0.3)
 
 
 def test_rig_rays_and_images():
