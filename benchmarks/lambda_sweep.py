@@ -1,7 +1,8 @@
 """Sweep the regularizer weight λ of one honest-protocol method and print what each rule picks.
 
 Usage: python benchmarks/lambda_sweep.py [--truth synthetic] [--method VG/TV]
-       [--lambdas 3 10 30 100] [--model-error 6] [--out results/lambda_sweep]
+       [--lambdas 3 10 30 100] [--model-error 6] [--tv-smoothing 0.1]
+       [--out results/lambda_sweep]
 
 Runs the method of ``invflame study --preset quick`` (same data, start, solver and stopping
 rule; one measurement and one start shared by all λ) once per λ, then prints per λ the
@@ -35,8 +36,11 @@ if __name__ == "__main__":
                         help="make the data from the truth averaged onto the reconstruction grid "
                              "(as at the paper's size, where the truth's grid is the "
                              "reconstruction's): model error of sub-rays and step only")
+    parser.add_argument("--tv-smoothing", type=float, default=0.0, metavar="EPS",
+                        help="Huber smoothing of TV in 1/m (regularizer.tv_smoothing; 0: exact)")
     args = parser.parse_args()
     cfg = reproduce.method_config("quick", args.method, 0, "honest", args.truth)
+    cfg["regularizer"]["tv_smoothing"] = args.tv_smoothing
     scene, native = runner.build_scene(cfg), runner.load_truth(cfg)
     if args.resolved:
         native = native.resample(scene.grid)

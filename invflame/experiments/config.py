@@ -180,6 +180,7 @@ def validate(config: dict) -> dict:
     _check_sources(config, full)
     _check_grid(config, full)
     _check_soot(full)
+    _check_tv_smoothing(full)
     _check_regularizer(full["regularizer"])
     _check_background(full["background"])
     _check_spectrum(full)
@@ -331,6 +332,20 @@ def _check_soot(full: dict) -> None:
         raise ConfigError(f"'truth.soot' = {truth['soot']!r} exceeds 'soot.max' = "
                           f"{soot['max']!r}, the bound of the reconstructed soot volume "
                           "fraction: raise soot.max to at least truth.soot")
+
+
+def _check_tv_smoothing(full: dict) -> None:
+    reg, kind = full["regularizer"], full["representation"]["kind"]
+    if reg["tv_smoothing"] == 0:
+        return
+    if reg["kind"] != "tv":
+        raise ConfigError(f"'regularizer.tv_smoothing' = {reg['tv_smoothing']!r} smooths total "
+                          f"variation, but 'regularizer.kind' = {reg['kind']!r}: set kind = "
+                          "'tv' or tv_smoothing = 0")
+    if kind != "voxel":
+        raise ConfigError(f"'regularizer.tv_smoothing' needs 'representation.kind' = 'voxel', "
+                          f"got {kind!r} (the networks' regularizer is exact TV): set "
+                          "tv_smoothing = 0")
 
 
 def rig_spec(cfg: dict):

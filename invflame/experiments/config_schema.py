@@ -273,6 +273,9 @@ SCHEMA: dict[str, Key | Section] = {
         "tau": Key(NUMBER_OR_STRING, 1.0, "'discrepancy' takes the largest λ with χ² ≤ τM; "
                    "'model-error': τ = 1 + the model error estimated from prior flames "
                    "(invflame.experiments.model_error)", choices=("model-error",), low=1.0),
+        "tv_smoothing": Key(NUMBER, 0.0, "Huber smoothing ε of TV's absolute gradients "
+                            "(voxels; 0: exact TV): makes TV differentiable, so that L-BFGS "
+                            "does not stall at large λ", "1/m", low=0.0),
     }),
     "solver": Section("the optimizer and its stopping rules", {
         "name": Key(STRING, "adam", "a solver's name from solvers.available() (gd, adam, "

@@ -23,7 +23,8 @@ def make_representation(cfg: dict, scene: Scene):
     if kind == "neural-centres":
         return NeuralCentresRepresentation(scene, **network)
     return VoxelRepresentation(scene.grid, scene.operator, temperature_range=_t_range(scene),
-                               soot_max=cfg["soot"]["max"])
+                               soot_max=cfg["soot"]["max"],
+                               tv_smoothing=cfg["regularizer"]["tv_smoothing"])
 
 
 def starting_parameters(cfg: dict, representation, start: np.ndarray, progress: bool):

@@ -21,7 +21,7 @@ from invflame.representations.whitening import whitened
 REGULARIZERS = ("none", "tikhonov", "tv")
 
 
-def regularizer_for(kind: str, grid: VoxelGrid, n_fields: int = 4):
+def regularizer_for(kind: str, grid: VoxelGrid, n_fields: int = 4, tv_smoothing: float = 0.0):
     r"""The voxel regularizer Φ on normalized fields, as an ``operators.Composite`` or None.
 
     Parameters
@@ -33,14 +33,18 @@ def regularizer_for(kind: str, grid: VoxelGrid, n_fields: int = 4):
         Gives the shape and spacing (m).
     n_fields : int, optional
         Number of fields (default 4).
+    tv_smoothing : float, optional
+        Huber smoothing of TV's absolute values (:func:`operators.total_variation`), in 1/m
+        (normalized field per metre); 0 (default): exact TV.
     """
     if kind not in REGULARIZERS:
         raise ValueError(f"unknown regularizer {kind!r}; choose one of {', '.join(REGULARIZERS)}")
     if kind == "none":
         return None
     dims = (n_fields, *grid.shape)
-    make = op.tikhonov if kind == "tikhonov" else op.total_variation
-    return make(dims, tuple(grid.spacing))
+    if kind == "tikhonov":
+        return op.tikhonov(dims, tuple(grid.spacing))
+    return op.total_variation(dims, tuple(grid.spacing), smoothing=tv_smoothing)
 
 
 class VoxelRepresentation(Representation):
@@ -62,19 +66,24 @@ class VoxelRepresentation(Representation):
         Upper bound of the soot volume fraction when the map takes one (dimensionless,
         default :data:`~invflame.representations.normalization.SOOT_MAX`); its lower bound
         is 0.
+    tv_smoothing : float, optional
+        Huber smoothing of the TV regularizer in 1/m (:func:`regularizer_for`); 0 (default):
+        exact TV.
     """
 
     kind = "voxel"
     iterations_per_epoch = 1
 
     def __init__(self, grid: VoxelGrid, forward: op.Operator,
-                 temperature_range=(250.0, 2500.0), soot_max: float = SOOT_MAX):
+                 temperature_range=(250.0, 2500.0), soot_max: float = SOOT_MAX,
+                 tv_smoothing: float = 0.0):
         if tuple(forward.dims) not in ((4, *grid.shape), (5, *grid.shape)):
             raise ValueError(f"forward map takes {forward.dims}, expected {(4, *grid.shape)} "
                              f"(or 5 fields with soot) for a {grid.shape} grid")
         dims = tuple(forward.dims)
         self.grid = grid
         self.dims = dims
+        self.tv_smoothing = float(tv_smoothing)
         self.forward = forward @ op.Diagonal(per_field(field_scales(dims[0]), dims),
                                              dtype=forward.dtype, name="denormalize")
         bounds = physical_bounds(*temperature_range, soot_max if dims[0] == 5 else None)
@@ -109,7 +118,8 @@ class VoxelRepresentation(Representation):
         """
         forward, data = whitened(self.forward, data, sigma)
         return solvers.Problem(
-            forward, data, regularizer=regularizer_for(regularizer, self.grid, self.dims[0]),
+            forward, data, regularizer=regularizer_for(regularizer, self.grid, self.dims[0],
+                                                       self.tv_smoothing),
             lam=lam,
             lower=self.lower, upper=self.upper, x0=x0,
             name=f"voxel/{regularizer}",

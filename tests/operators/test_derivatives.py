@@ -56,6 +56,42 @@ def test_l1_prox_and_dual_prox_satisfy_moreau():
     assert np.abs(l1.prox_dual(y, sigma)).max() <= 0.3
 
 
+def test_huber_smoothed_l1_value_gradient_and_proximal_maps():
+    eps, c = 0.2, 0.3
+    huber = op.L1(scale=c, smoothing=eps)
+    x = np.array([-1.0, -0.2, -0.05, 0.0, 0.1, 0.5])
+    expected = c * np.where(np.abs(x) <= eps, x**2 / (2 * eps), np.abs(x) - eps / 2)
+    assert huber(x) == pytest.approx(expected.sum(), rel=1e-14)
+    # below the exact L1 by at most c * eps / 2 per entry
+    assert 0 <= op.L1(scale=c)(x) - huber(x) <= c * x.size * eps / 2
+    # differentiable everywhere, also at 0 where the exact L1 has its kinks
+    z = np.random.default_rng(4).standard_normal(20) * 0.1
+    z[:5] = 0.0
+    assert op.gradient_taylor_test(huber, huber.grad, z).passed
+    # prox: the minimizer of c h(z) + (z - x)^2 / (2 tau), checked by brute force per entry
+    tau = 0.4
+    grid = np.linspace(-2, 2, 400001)
+    for xi in x:
+        brute = grid[np.argmin(c * np.where(np.abs(grid) <= eps, grid**2 / (2 * eps),
+                                            np.abs(grid) - eps / 2) + (grid - xi) ** 2 / (2 * tau))]
+        assert huber.prox(np.array([xi]), tau)[0] == pytest.approx(brute, abs=2e-5)
+    y, sigma = np.linspace(-2, 2, 11), 0.7
+    np.testing.assert_allclose(huber.prox_dual(y, sigma),
+                               y - sigma * huber.prox(y / sigma, 1 / sigma), atol=1e-14)
+    with pytest.raises(ValueError, match="smoothing must be"):
+        op.L1(smoothing=-1.0)
+
+
+def test_smoothed_total_variation_is_differentiable_on_a_flat_field():
+    f = np.zeros(DIMS)
+    f[0, 2:, 1:, :] = 1.0  # flat regions, one step
+    tv = op.total_variation(DIMS, SPACING, smoothing=0.05)
+    assert tv(f) < op.total_variation(DIMS, SPACING)(f)
+    direction = np.random.default_rng(5).standard_normal(DIMS)
+    # steps below the smoothing's reach (h |D v| < 0.05), where the remainder is quadratic
+    assert op.gradient_taylor_test(tv, tv.grad, f, direction, h0=1e-3).passed
+
+
 def test_bad_dims_and_spacing():
     with pytest.raises(ValueError, match="n_fields, nx, ny, nz"):
         op.D_x((5, 4, 3))

@@ -14,7 +14,7 @@ def test_defaults_and_partial_override(tmp_path):
     cfg = config.load(path)
     assert cfg["solver"]["name"] == "gd" and cfg["solver"]["options"] == {"step": 0.5}
     assert cfg["regularizer"] == {"kind": "tv", "lambda": 1e-3, "scaling": "chi2",
-                                  "lambda_range": [1e-3, 1e2], "tau": 1.0}
+                                  "lambda_range": [1e-3, 1e2], "tau": 1.0, "tv_smoothing": 0.0}
     assert cfg["rig"]["focal_length"] == 0.59
     path.write_text(config.dumps(cfg))
     assert config.load(path) == cfg

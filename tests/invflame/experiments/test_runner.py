@@ -200,3 +200,19 @@ def test_table_marks_the_lambdas_chosen_from_the_data():
         dict(row, method="NN/TV", **{"lambda": 30.0, "lambda_from_data": False})]
     text = reproduce.markdown_table(rows, [], "quick", "honest", {})
     assert "| VG/TV | 1e+04* |" in text and "| NN/TV | 30 |" in text
+
+
+def test_tv_smoothing_reaches_the_voxel_problem_and_is_refused_where_it_means_nothing(tmp_path):
+    cfg = tiny(regularizer={"kind": "tv", "lambda": 1e5, "tv_smoothing": 0.1},
+               solver={"name": "lbfgs", "iterations": 4, "options": {}})
+    scene = runner.build_scene(cfg)
+    problem = runner.make_representation(cfg, scene).problem(
+        np.zeros(scene.data_shape, np.float32), regularizer="tv")
+    assert problem.regularizer.functional.smoothing == 0.1
+    summary = runner.run_experiment(cfg, tmp_path, progress=False)
+    assert summary["loss"]["final"] < summary["loss"]["initial"]
+    with pytest.raises(config.ConfigError, match="set kind = 'tv' or tv_smoothing = 0"):
+        tiny(regularizer={"kind": "tikhonov", "tv_smoothing": 0.1})
+    with pytest.raises(config.ConfigError, match="needs 'representation.kind' = 'voxel'"):
+        tiny(regularizer={"kind": "tv", "tv_smoothing": 0.1},
+             representation={"kind": "neural-field"})
