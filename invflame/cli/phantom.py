@@ -59,6 +59,14 @@ def add_parser(subparsers) -> None:
         help="relative puffing/turbulence amplitude of the synthetic plume in [0, 1) "
         "(needs --seed; default 0, the smooth plume)",
     )
+    write.add_argument(
+        "--sheet-rise",
+        type=arguments.positive,
+        default=None,
+        help="temperature rise in K of the synthetic plume's flame sheet (e.g. 1950, adiabatic "
+        "methane-air): the gas holds that sheet's state part of the time and air otherwise, "
+        "keeping McCaffrey's mean temperature (default: the mean flame rise itself)",
+    )
     write.set_defaults(func=run_write)
 
     info = sub.add_parser(
@@ -113,10 +121,15 @@ def run_write(args: argparse.Namespace) -> int:
     if args.n is not None:
         kwargs["grid"] = VoxelGrid.poolfire(args.n)
     if args.name == "synthetic":
-        kwargs.update(seed=args.seed, perturbation=args.perturbation or 0.0)
-    elif args.seed is not None or args.perturbation is not None:
-        raise SystemExit(f"error: --seed and --perturbation apply to 'synthetic', not {args.name}")
-    field = make_phantom(args.name, **kwargs)
+        kwargs.update(seed=args.seed, perturbation=args.perturbation or 0.0,
+                      sheet_rise=args.sheet_rise)
+    elif args.seed is not None or args.perturbation is not None or args.sheet_rise is not None:
+        raise SystemExit("error: --seed, --perturbation and --sheet-rise apply to 'synthetic', "
+                         f"not {args.name}")
+    try:
+        field = make_phantom(args.name, **kwargs)
+    except ValueError as err:  # a parameter out of its range: the message says which
+        raise SystemExit(f"error: {err}") from None
     field.save(args.out)
     print(field.summary())
     print(f"wrote {args.out}")

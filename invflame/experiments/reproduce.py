@@ -236,10 +236,10 @@ def _cell(value, fmt: str = ".4f") -> str:
 
 
 def markdown_table(rows: list[dict], baselines: list[dict], preset: str, protocol: str,
-                   described: dict) -> str:
-    """The comparison and its baselines as Markdown, with what made the data."""
+                   truth: str, described: dict) -> str:
+    """The comparison and its baselines as Markdown, with the truth and what made the data."""
     lines = [
-        f"Preset `{preset}`, protocol `{protocol}`.",
+        f"Preset `{preset}`, protocol `{protocol}`, truth `{truth}`.",
         "",
         *(f"- {what}: {how}" for what, how in described.items() if what != "lambda"),
         "",
@@ -391,7 +391,7 @@ def reproduce(preset: str = "quick", out_dir="results", resume: bool = False,
                                     "truth": str(truth), "made_by": described, "rows": rows,
                                     "baselines": baselines,
                                     "coverage": summaries[base]["coverage"]})
-    text = (markdown_table(rows, baselines, preset, protocol, described) + "\n"
+    text = (markdown_table(rows, baselines, preset, protocol, str(truth), described) + "\n"
             + findings(rows, baselines))
     write_text(out / "table.md", text)
     comparison_figures(out, {m: out / folder_name(m) for m in methods})

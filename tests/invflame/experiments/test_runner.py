@@ -198,8 +198,9 @@ def test_table_marks_the_lambdas_chosen_from_the_data():
            "epoch_ms": 10.0, "paper_MSE_T": 0.0121}
     rows = [dict(row, **{"lambda": 1.0e4, "lambda_from_data": True}),
         dict(row, method="NN/TV", **{"lambda": 30.0, "lambda_from_data": False})]
-    text = reproduce.markdown_table(rows, [], "quick", "honest", {})
+    text = reproduce.markdown_table(rows, [], "quick", "honest", "poolfire", {})
     assert "| VG/TV | 1e+04* |" in text and "| NN/TV | 30 |" in text
+    assert text.startswith("Preset `quick`, protocol `honest`, truth `poolfire`.")
 
 
 def test_tv_smoothing_reaches_the_voxel_problem_and_is_refused_where_it_means_nothing(tmp_path):

@@ -72,6 +72,25 @@ def test_plume_is_physical_and_peaks_on_axis():
     assert grid.axes()[1][iy.max()] < 0.25
 
 
+def test_sheet_rise_keeps_the_mean_temperature_and_scales_the_gas_toward_air():
+    grid = VoxelGrid.poolfire(16)
+    flame = float(mccaffrey_centreline_rise(0.0, 13.0, 300.0))
+    own, sheet = synthetic_plume(grid), synthetic_plume(grid, sheet_rise=1950.0)
+    np.testing.assert_array_equal(sheet.T, own.T)
+    hot = (own.X("CO2") > 0.01) & (own.X("CH4") == 0)  # burnt lean gas
+    # mole fractions of CO2 + H2O per kelvin of rise: those of the sheet's stoichiometric
+    # state (3 mol in 10.52), 1950 K or the flame's own rise above ambient; mole fractions are
+    # not linear in the mass fractions the states are mixed by, hence 10 %
+    for field, rise in ((sheet, 1950.0), (own, flame)):
+        per_kelvin = (field.X("CO2") + field.X("H2O"))[hot] / (field.T[hot] - 300.0)
+        np.testing.assert_allclose(per_kelvin, 3 / 10.52 / rise, rtol=0.1)
+    assert 0 < sheet.X("CH4").max() < own.X("CH4").max()  # the fuel core diluted by air too
+    assert sheet.metadata["sheet_rise_K"] == 1950.0
+    assert own.metadata["sheet_rise_K"] == pytest.approx(flame)
+    with pytest.raises(ValueError, match="at least the continuous flame"):
+        synthetic_plume(grid, sheet_rise=500.0)
+
+
 def test_resolution_consistency():
     coarse = synthetic_plume(VoxelGrid.poolfire(20))
     fine = synthetic_plume(VoxelGrid.poolfire(40)).resample(VoxelGrid.poolfire(20))

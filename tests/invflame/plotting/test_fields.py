@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from invflame.cli import phantom
+from invflame.field import Field
 from invflame.geometry import VoxelGrid
 from invflame.phantoms import synthetic_plume
 from invflame.plotting.fields import mid_plane, plot_fields
@@ -42,6 +43,17 @@ def test_cli_plot_and_write(tmp_path, capsys):
     png = tmp_path / "s.png"
     args = parser.parse_args(["phantom", "plot", str(out), "--out", str(png)])
     assert args.func(args) == 0 and png.stat().st_size > 10_000
+    sheet = tmp_path / "sheet.npz"
+    args = parser.parse_args(["phantom", "write", "synthetic", "--n", "12", "--sheet-rise",
+                              "1950", "--out", str(sheet)])
+    assert args.func(args) == 0 and Field.load(sheet).metadata["sheet_rise_K"] == 1950.0
+    for name, rise, message in (("synthetic", "500", "at least the continuous flame's"),
+                                ("poolfire", "1950", "apply to 'synthetic', not poolfire")):
+        args = parser.parse_args(["phantom", "write", name, "--sheet-rise", rise,
+                                  "--out", str(tmp_path / "no.npz")])
+        with pytest.raises(SystemExit, match=message):
+            args.func(args)
+    assert not (tmp_path / "no.npz").exists()
     args = parser.parse_args(["phantom", "info", "nonexistent.npz"])
     with pytest.raises(SystemExit, match="neither a field file nor a phantom name"):
         args.func(args)
