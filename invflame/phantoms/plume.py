@@ -189,7 +189,7 @@ def synthetic_plume(
     mixture = np.maximum(lean, core)
     temperature, _ = burke_schumann_methane(mixture, flame_rise, ambient)
     _, sheet = burke_schumann_methane(mixture, sheet_rise, ambient)
-    _, air = burke_schumann_methane(np.zeros_like(mixture), sheet_rise, ambient)
+    _, air = burke_schumann_methane(0.0, sheet_rise, ambient)  # one state, broadcast
     share = flame_rise / sheet_rise  # of the time the gas holds the sheet's state
     mass = {s: share * sheet[s] + (1 - share) * air[s] for s in sheet}
     mole = mass_to_mole_fractions(mass, MOLAR_MASS)
