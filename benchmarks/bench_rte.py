@@ -14,14 +14,18 @@ the repeats:
   sweep, value and tangent together), as Gauss–Newton and PDHG use it;
 * kernel forward, VJP, JVP: the emission kernel alone on the scene's segment fields
   (:func:`~operators.rte_kernel.emission_radiance`, its pullback of a given cotangent with the
-  value, :func:`~operators.rte_kernel.emission_radiance_jvp`);
+  value, :func:`~operators.rte_kernel.emission_radiance_jvp`); the VJP with the default reverse
+  sweep (:func:`~operators.rte_kernel.reverse_sweep`: Numba's on one CPU device) and with
+  XLA's;
 * exp-only: a jitted ``exp`` over as many float32 elements, in the same ray batches and
   the same number of segment steps per batch as the kernel;
 * with ``--stages``, the stages of the kernel, each a jitted loop over the same batches and
   segment steps on the scene's segment fields: the cross-section spline (gathered table
   rows, Horner sums, the optical depth), the Planck spline, the transmission (``exp`` and
   absorptance), the sums over wavenumber of the reverse sweep, the whole forward and reverse
-  sweeps, and the gathers and scatters that put rays into batches and back (with their VJP).
+  sweeps (the reverse one as XLA runs it and as Numba does, :mod:`operators.rte_sweep_cpu`,
+  all rays at once on host arrays), and the gathers and scatters that put rays into batches and
+  back (with their VJP).
 
 "elements" is the number of real segments times the number of wavenumbers; the kernel also
 sweeps the padding of each batch (rays sorted by segment count), reported as "swept".
@@ -41,8 +45,15 @@ from timing import CLOCKS, best_time
 from invflame.phantoms.registry import make_phantom
 from invflame.scene import Scene
 from operators import rte_kernel
-from operators.rte_batches import batched_inputs, from_batches, ray_order, spectra_batches
+from operators.rte_batches import (
+    batched_inputs,
+    from_batches,
+    ray_order,
+    segment_counts,
+    spectra_batches,
+)
 from operators.rte_kernel import emission_radiance, emission_radiance_jvp
+from operators.rte_sweep_cpu import sweep_vjp
 
 
 def resident_mib() -> float:
@@ -116,6 +127,14 @@ def stages(scene: Scene, fields, repeats: int, clock: str) -> dict:
         lambda a: rte_kernel._sweep_vjp(tables, *a[1], a[0], *a[2]), (n, b, s)))
     times["reverse sweep"] = best_time(lambda: reverse(n_segments, batches, spectra_in),
                                        repeats, clock)
+    index = rte_kernel._interval(tables, segment_fields[0])
+    species = 1 + np.asarray(tables.species, dtype=int)
+    amount, offset = (np.asarray(w) for w in rte_kernel._segment_weights(
+        tables, index, segment_fields[0], segment_fields[species], lengths)[:2])
+    host = [np.asarray(a) for a in (tables.coef, index, amount, offset,
+                                    segment_counts(lengths), radiance, cotangent)]
+    times["reverse sweep, Numba"] = best_time(
+        lambda: sweep_vjp(*host, n_gas=amount.shape[-1] - int(tables.soot)), repeats, clock)
 
     def batching(f, s, spectrum):
         out, to_inputs = jax.vjp(
@@ -137,13 +156,17 @@ def kernel_calls(scene: Scene, fields, direction) -> dict:
     tangent = jnp.asarray(scene.sampling(direction.reshape(fields.shape)), tables.dtype)
     cotangent = jnp.ones((lengths.shape[0], tables.n_eta), tables.dtype)
 
-    def radiance(f):
-        return emission_radiance(tables, f, lengths, batch_rays)
+    def radiance(f, reverse=None):
+        return emission_radiance(tables, f, lengths, batch_rays, reverse=reverse)
 
-    pullback = jax.jit(lambda f: jax.vjp(radiance, f)[1](cotangent))
+    def pullback(reverse):
+        return jax.jit(lambda f: jax.vjp(partial(radiance, reverse=reverse), f)[1](cotangent))
+
+    default, xla = pullback(None), pullback("xla")
     return {
         "kernel forward": lambda: radiance(segment_fields),
-        "kernel VJP": lambda: pullback(segment_fields),
+        "kernel VJP": lambda: default(segment_fields),
+        "kernel VJP, XLA sweep": lambda: xla(segment_fields),
         "kernel JVP": lambda: emission_radiance_jvp(tables, segment_fields, lengths, tangent,
                                                     jnp.zeros_like(lengths), batch_rays),
     }
@@ -211,7 +234,7 @@ def main() -> None:
     print(f"batch {scene.batch_rays} rays; elements {elements:.4g} (segments x n_eta), "
           f"swept {swept:.4g} ({swept / elements - 1:+.1%} padding)")
     for name, t in times.items():
-        print(f"{name:>18}: {1e3 * t:8.1f} ms  {1e9 * t / elements:6.2f} ns/element  "
+        print(f"{name:>22}: {1e3 * t:8.1f} ms  {1e9 * t / elements:6.2f} ns/element  "
               f"{t / times['exp-only']:5.2f} x exp-only")
     print(f"JVP / forward: {times['JVP'] / times['forward']:.2f} (scene), "
           f"{times['kernel JVP'] / times['kernel forward']:.2f} (kernel)")

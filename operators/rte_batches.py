@@ -62,12 +62,17 @@ def ray_order(lengths, batch_rays):
     n_segments : jax.Array of int, shape (n_batches,)
         Segments to sweep in each batch of the sorted rays.
     """
-    n_rays, n_seg = lengths.shape
-    count = jnp.max(jnp.where(lengths != 0, jnp.arange(1, n_seg + 1), 0), axis=1)
+    n_rays = lengths.shape[0]
+    count = segment_counts(lengths)
     order = jnp.argsort(count, stable=True)
     n_batches = -(-n_rays // batch_rays)
     padded = jnp.zeros(n_batches * batch_rays, count.dtype).at[:n_rays].set(count[order])
     return order, padded.reshape(n_batches, batch_rays).max(axis=1)
+
+
+def segment_counts(lengths):
+    """Segments of each ray up to its last of non-zero length, shape ``(n_rays,)``."""
+    return jnp.max(jnp.where(lengths != 0, jnp.arange(1, lengths.shape[1] + 1), 0), axis=1)
 
 
 def segment_batches(x, order, batch_rays, fill):

@@ -50,8 +50,11 @@ and :math:`B = \tilde B(u)`; so the sums over wavenumber are taken of the physic
 :math:`\sum_\eta (g_\tau \partial_u\tau + g_B \partial_u B)` (``n_gas + 1`` sums per
 segment, not one per spline coefficient, four per gas and four for :math:`B`); JAX then
 carries them to :math:`(T_k, X_{s,k}, \Delta s_k)` through the scalar weights
-:math:`(a_s, u)`. Forward-mode derivatives (JVPs) run JAX's forward mode through the
-forward sweep, with the same memory. ``docs/performance.md`` has the measured costs.
+:math:`(a_s, u)`. On the CPU backend the same sweep runs compiled by Numba, one ray at a time
+with its spectra in cache (:mod:`operators.rte_sweep_cpu`, :func:`reverse_sweep`); XLA's CPU
+backend writes each intermediate spectrum of a ray batch to memory instead. Forward-mode
+derivatives (JVPs) run JAX's forward mode through the forward sweep, with the same memory.
+``docs/performance.md`` has the measured costs.
 
 **Layout.** Rays are sorted by their number of segments and processed in batches
 (:mod:`operators.rte_batches`), each batch sweeping only as many segments as its longest ray.
@@ -69,6 +72,7 @@ from functools import partial
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from operators.planck import planck
 from operators.rte_batches import (
@@ -76,8 +80,10 @@ from operators.rte_batches import (
     batched_inputs,
     from_batches,
     ray_order,
+    segment_counts,
     spectra_batches,
 )
+from operators.rte_sweep_cpu import sweep_vjp
 from operators.rte_tables import RTETables
 
 
@@ -263,18 +269,24 @@ def _radiance_impl(batch_rays, tables, fields, lengths, background=None):
     return from_batches(out, order)
 
 
-@partial(jax.custom_vjp, nondiff_argnums=(0,))
-def _radiance(batch_rays, tables, fields, lengths, background=None):
+@partial(jax.custom_vjp, nondiff_argnums=(0, 1))
+def _radiance(batch_rays, reverse, tables, fields, lengths, background=None):
     return _radiance_impl(batch_rays, tables, fields, lengths, background)
 
 
-def _radiance_fwd(batch_rays, tables, fields, lengths, background=None):
+def _radiance_fwd(batch_rays, reverse, tables, fields, lengths, background=None):
     radiance = _radiance_impl(batch_rays, tables, fields, lengths, background)
     return radiance, (tables, fields, lengths, radiance, background)
 
 
-def _radiance_bwd(batch_rays, residuals, cotangent):
+def _radiance_bwd(batch_rays, reverse, residuals, cotangent):
     tables, fields, lengths, radiance, background = residuals
+    if reverse == "numba" and tables.planck == "table":
+        d_fields, d_lengths, transmittance = _cotangents_numba(tables, fields, lengths,
+                                                               radiance, cotangent)
+        d_background = None if background is None else cotangent * transmittance
+        return (jax.tree_util.tree_map(jnp.zeros_like, tables), d_fields, d_lengths,
+                d_background)
     order, n_segments = ray_order(lengths, batch_rays)
     batches, to_inputs = jax.vjp(
         lambda f, s: batched_inputs(tables, f, s, order, batch_rays), fields, lengths)
@@ -283,15 +295,63 @@ def _radiance_bwd(batch_rays, residuals, cotangent):
         lambda b: _batch_cotangent(tables, background is not None, *b),
         (*batches, n_segments, *spectra))
     d_fields, d_lengths = to_inputs(grads)
+    d_lengths = jnp.where(jnp.arange(lengths.shape[1]) < segment_counts(lengths)[:, None],
+                          d_lengths, 0)  # a batch sweeps its rays' padding too: not theirs
     d_background = None if background is None else from_batches(d_background, order)
     return jax.tree_util.tree_map(jnp.zeros_like, tables), d_fields, d_lengths, d_background
 
 
+def _cotangents_numba(tables: RTETables, fields, lengths, radiance, cotangent):
+    """The reverse sweep of all rays by :func:`operators.rte_sweep_cpu.sweep_vjp` (a host
+    callback), its weights' cotangents carried to the fields and lengths by JAX."""
+    index = _interval(tables, fields[0])
+    species = 1 + np.asarray(tables.species, dtype=int)
+    weights, to_inputs = jax.vjp(
+        lambda f, s: _segment_weights(tables, index, f[0], f[species], s)[:2], fields, lengths)
+    amount, offset = weights
+    n_tau = amount.shape[-1]
+    n_segments = segment_counts(lengths)
+    shapes = (jax.ShapeDtypeStruct(amount.shape[:-1] + (n_tau + 1,), tables.dtype),
+              jax.ShapeDtypeStruct(radiance.shape, tables.dtype))
+    d_weights, transmittance = jax.pure_callback(
+        partial(sweep_vjp, n_gas=n_tau - int(tables.soot)), shapes, tables.coef, index,
+        amount, offset, n_segments, radiance, cotangent, vmap_method="sequential")
+    d_fields, d_lengths = to_inputs((d_weights[..., :n_tau], d_weights[..., n_tau]))
+    return d_fields, d_lengths, transmittance
+
+
 _radiance.defvjp(_radiance_fwd, _radiance_bwd)
-_radiance_jit = jax.jit(_radiance, static_argnums=0)
+_radiance_jit = jax.jit(_radiance, static_argnums=(0, 1))
 
 
-def radiance_kernel(batch_rays: int, forward_mode: bool = False):
+#: The reverse sweeps: JAX's, lowered by XLA for any backend, and the Numba one for CPUs
+#: (:mod:`operators.rte_sweep_cpu`, which needs the Planck spline; with the exact Planck law
+#: the XLA one runs).
+REVERSE_SWEEPS = ("xla", "numba")
+
+
+def reverse_sweep(name: str | None = None) -> str:
+    """The reverse sweep to use: ``name`` checked, or by default ``"numba"`` where JAX runs
+    on one CPU device (its kernel VJP took 0.55 × the time of XLA's at the paper's size,
+    ``docs/performance.md``) and ``"xla"`` elsewhere: on other backends, and on several CPU
+    devices in one process, where the Numba sweep's host callbacks, called from the devices'
+    threads, deadlock the sharded kernel's collectives (``tests/operators/sharding_check.py``
+    aborts in XLA's all-reduce).
+
+    Raises
+    ------
+    ValueError
+        For a name not in :data:`REVERSE_SWEEPS`.
+    """
+    if name is None:
+        one_cpu = jax.default_backend() == "cpu" and jax.local_device_count() == 1
+        return "numba" if one_cpu else "xla"
+    if name not in REVERSE_SWEEPS:
+        raise ValueError(f"unknown reverse sweep {name!r}; choose one of {REVERSE_SWEEPS}")
+    return name
+
+
+def radiance_kernel(batch_rays: int, forward_mode: bool = False, reverse: str | None = None):
     """The kernel as a JAX function ``radiance(tables, fields, lengths, background=None)``,
     unchecked.
 
@@ -307,6 +367,8 @@ def radiance_kernel(batch_rays: int, forward_mode: bool = False):
         forward mode: JAX cannot push tangents through a custom VJP). True: forward-mode
         differentiable, JAX's JVP through the forward sweep (no reverse mode: the sweep's
         trip count is not static). Both give the same radiance.
+    reverse : {"xla", "numba"}, optional
+        The reverse sweep of the custom VJP (default: :func:`reverse_sweep`).
 
     Returns
     -------
@@ -314,11 +376,13 @@ def radiance_kernel(batch_rays: int, forward_mode: bool = False):
         ``radiance(tables, fields, lengths, background=None) -> (n_rays, n_eta)`` in
         W/(m²·sr·cm⁻¹).
     """
-    return partial(_radiance_impl if forward_mode else _radiance, int(batch_rays))
+    if forward_mode:
+        return partial(_radiance_impl, int(batch_rays))
+    return partial(_radiance, int(batch_rays), reverse_sweep(reverse))
 
 
 def emission_radiance(tables: RTETables, fields, lengths, batch_rays: int | None = None,
-                      background=None):
+                      background=None, reverse: str | None = None):
     """Spectral radiance leaving each ray's near end: the emission kernel, a JAX function.
 
     Differentiable in reverse mode with a memory-lean custom VJP (w.r.t. ``fields``,
@@ -340,6 +404,8 @@ def emission_radiance(tables: RTETables, fields, lengths, batch_rays: int | None
     background : jax.Array, shape (n_rays, n_eta) or (n_eta,), optional
         Radiance behind each ray's far end in W/(m²·sr·cm⁻¹), seen through the ray's
         transmittance (default None: none, as zero but without the cost).
+    reverse : {"xla", "numba"}, optional
+        The reverse sweep of the VJP (default: :func:`reverse_sweep`); same values.
 
     Returns
     -------
@@ -349,7 +415,8 @@ def emission_radiance(tables: RTETables, fields, lengths, batch_rays: int | None
     fields, lengths, background = _check_inputs(tables, fields, lengths, background)
     if batch_rays is None:
         batch_rays = batch_rays_for(tables, lengths.shape[0])
-    return _radiance_jit(int(batch_rays), tables, fields, lengths, background)
+    return _radiance_jit(int(batch_rays), reverse_sweep(reverse), tables, fields, lengths,
+                         background)
 
 
 def emission_radiance_jvp(tables: RTETables, fields, lengths, d_fields, d_lengths,
