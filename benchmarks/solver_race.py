@@ -2,8 +2,8 @@
 
 Usage: python benchmarks/solver_race.py [--size quick|paper] [--protocol paper|honest]
        [--regularizer tikhonov|tv|both] [--solvers NAME ...] [--budget-s 90]
-       [--clock cpu|wall] [--reference-iterations N] [--lam KIND=VALUE ...]
-       [--out results/solver_race]
+       [--clock cpu|wall] [--reference-iterations N | --reference-run DIR]
+       [--lam KIND=VALUE ...] [--out results/solver_race]
        python benchmarks/solver_race.py --merge DIR ... --out DIR
 
 The problems are the voxel methods VG/Tikh. and VG/TV of ``invflame reproduce`` (protocol
@@ -27,13 +27,23 @@ iterations, and writes ``race.json``, ``race.md`` and ``race.png`` (MSE_T and ob
 time, one column per problem) into ``--out``. A variant whose solver refuses a problem is
 skipped with the solver's reason; one that raises is reported as failed, with the error.
 ``--merge`` reports races run side by side (e.g. one regularizer each) as one.
+
+At the paper's size the reference's 2000 Adam epochs take about an hour per problem on two CPU
+cores. ``--reference-run DIR`` takes the reference from a finished ``invflame reproduce`` run of
+the same method instead (:func:`recorded_reference`): its objective and wall time per iteration
+from ``history.csv``, its MSE_T at the start and the end (``reconstruction.npz``, scored against
+the race's truth) and none in between. The race then runs on wall time (``--clock wall``, on an
+idle machine), and a run whose start objective differs from the race problem's is refused.
 """
 
 from __future__ import annotations
 
 import argparse
+import csv
 import json
+import math
 import time
+import tomllib
 from pathlib import Path
 
 import matplotlib
@@ -48,6 +58,7 @@ import solvers  # noqa: E402
 from invflame.experiments import reproduce, runner  # noqa: E402
 from invflame.experiments.metrics import normalized_mse  # noqa: E402
 from invflame.experiments.regularization import regularizer_weight  # noqa: E402
+from invflame.field import Field  # noqa: E402
 
 #: Variant name → (registered solver, options). A registered solver missing here races with
 #: its defaults under its own name.
@@ -193,6 +204,7 @@ def build_problems(size: str, protocol: str, regularizers: list[str],
     -------
     dict
         ``problems`` (method label → :class:`solvers.Problem`), ``mse_t`` (parameters → MSE_T),
+        ``mse_t_of_fields`` (physical fields ``(n_fields, nx, ny, nz)`` → MSE_T),
         ``iterations`` (the preset's iteration count) and ``lr`` (the protocol's Adam rate).
     """
     first = reproduce.method_config(size, METHODS[regularizers[0]], 0, protocol)
@@ -216,14 +228,17 @@ def build_problems(size: str, protocol: str, regularizers: list[str],
             lam=regularizer_weight(cfg, scene, measurement, lam),
             sigma=measurement.sigma if reg["scaling"] == "chi2" else None)
 
-    def mse_t(x):
-        fields = runner.physical_fields(scene, representation.fields(x))
+    def mse_t_of_fields(fields):
         return normalized_mse(truth.values, fields)["T"]
+
+    def mse_t(x):
+        return mse_t_of_fields(runner.physical_fields(scene, representation.fields(x)))
 
     print(f"scene: grid {scene.grid.shape}, {scene.n_rays} pixels x {scene.rays_per_pixel} "
           f"sub-rays, {scene.wavenumber.size} -> {scene.out_wavenumber.size} wavenumbers; "
           f"start MSE_T {mse_t(x0):.5f}", flush=True)
-    return {"problems": problems, "mse_t": mse_t, "iterations": first["solver"]["iterations"],
+    return {"problems": problems, "mse_t": mse_t, "mse_t_of_fields": mse_t_of_fields,
+            "iterations": first["solver"]["iterations"],
             "lr": reproduce.SOLVERS["voxel"]["options"]["lr"]}
 
 
@@ -267,8 +282,73 @@ def race(problem, mse_t, name: str, options: dict, max_iter: int, clock: str,
             "seconds": {key: trace.elapsed(key) for key in CLOCKS}}
 
 
+def recorded_reference(run_dir: Path, kind: str, problem: solvers.Problem,
+                       mse_t_of_fields) -> tuple[str, dict]:
+    """The reference from a finished ``invflame reproduce`` run of the race's problem.
+
+    Parameters
+    ----------
+    run_dir : Path
+        The run's folder (``config.toml``, ``history.csv``, ``summary.json``,
+        ``reconstruction.npz``), e.g. ``results/paper/VG-Tikh``.
+    kind : {"tikhonov", "tv"}
+        The race problem's regularizer, which the run's must be.
+    problem : solvers.Problem
+        The race problem; the run's objective at its start must equal this problem's at ``x0``
+        within 1e-4 relative, or the run solved another problem.
+    mse_t_of_fields : callable
+        Physical fields → MSE_T against the race's truth.
+
+    Returns
+    -------
+    name : str
+        The reference's name, from the run's solver and learning rate.
+    run : dict
+        As :func:`race` returns: one row per recorded iteration, wall seconds since the first
+        iterate was evaluated (the run's compile excluded), F and VJP counts of one each per
+        iterate (a gradient step's), the objective, and MSE_T at the start and the end only
+        (NaN between: the run did not record it); CPU seconds are NaN.
+    """
+    paths = {name: run_dir / name for name in
+             ("config.toml", "history.csv", "summary.json", "reconstruction.npz")}
+    missing = [name for name, path in paths.items() if not path.is_file()]
+    if missing:
+        raise SystemExit(f"--reference-run {run_dir}: no finished run there ({', '.join(missing)} "
+                         "missing); finish it with `invflame reproduce ... --resume` first")
+    cfg = tomllib.loads(paths["config.toml"].read_text())
+    if cfg["regularizer"]["kind"] != kind:
+        raise SystemExit(f"--reference-run {run_dir} regularizes with "
+                         f"{cfg['regularizer']['kind']!r}, the race with {kind!r}: pass the run "
+                         "of the raced method (--regularizer)")
+    with paths["history.csv"].open() as handle:
+        history = [{key: float(value) for key, value in row.items()}
+                   for row in csv.DictReader(handle)]
+    start = problem.evaluate(problem.x0).loss
+    if abs(history[0]["loss"] - start) > 1e-4 * abs(start):
+        raise SystemExit(f"--reference-run {run_dir} starts at objective {history[0]['loss']:.6g}, "
+                         f"the race problem at {start:.6g}: the run solved another problem "
+                         "(size, protocol, seed or λ differ)")
+    ends = (mse_t_of_fields(Field.load(run_dir / "initial.npz").values),
+            mse_t_of_fields(Field.load(paths["reconstruction.npz"]).values))
+    rows = []
+    for i, entry in enumerate(history):
+        k = round(entry["iteration"])
+        rows.append({"iteration": k, "cpu": math.nan, "wall": entry["time"] - history[0]["time"],
+                     "forward": k + 1, "jvp": 0, "vjp": k + 1, "loss": entry["loss"],
+                     "mse_t": ends[0] if i == 0 else ends[1] if i == len(history) - 1
+                     else math.nan})
+    summary = json.loads(paths["summary.json"].read_text())
+    options = cfg["solver"].get("options", {})
+    name = (f"{cfg['solver']['name']}" + (f" lr={options['lr']:g}" if "lr" in options else "")
+            + " (recorded)")
+    return name, {"solver": cfg["solver"]["name"], "options": options,
+                  "stop": summary["stop_reason"], "rows": rows,
+                  "seconds": {"cpu": math.nan, "wall": rows[-1]["wall"]}}
+
+
 def first_reach(rows: list[dict], key: str, level: float) -> dict | None:
-    """The first row whose ``key`` is at most ``level``, or None."""
+    """The first row whose ``key`` is at most ``level``, or None (a NaN, not recorded, never
+    is)."""
     return next((row for row in rows if row[key] <= level), None)
 
 
@@ -282,6 +362,10 @@ def reference_levels(rows: list[dict], n_iter: int) -> dict:
     return levels
 
 
+def _number(value: float, spec: str) -> str:
+    return "–" if math.isnan(value) else format(value, spec)
+
+
 def _cell(row: dict | None, clock: str) -> str:
     if row is None:
         return "–"
@@ -293,7 +377,7 @@ def markdown(label: str, runs: dict, levels: dict, clock: str) -> list[str]:
     heads = [f"{key} ≤ ref@{fraction}" for key in ("objective", "MSE_T") for fraction in levels]
     lines = [f"**{label}**: reference levels "
              + "; ".join(f"@{f} (iteration {v['iteration']}): objective {v['loss']:.4g}, "
-                         f"MSE_T {v['mse_t']:.5f}" for f, v in levels.items()),
+                         f"MSE_T {_number(v['mse_t'], '.5f')}" for f, v in levels.items()),
              "",
              "| variant | iterations | F/JVP/VJP | CPU / wall [s] | final objective | "
              "final MSE_T | " + " | ".join(heads) + " | stop |",
@@ -303,10 +387,12 @@ def markdown(label: str, runs: dict, levels: dict, clock: str) -> list[str]:
             continue
         rows, last = run["rows"], run["rows"][-1]
         cells = [_cell(first_reach(rows, key, level[key]), clock)
+                 if not math.isnan(level[key]) else "not recorded"
                  for key in ("loss", "mse_t") for level in levels.values()]
         seconds = run["seconds"]
         lines.append(f"| {variant} | {last['iteration']} | {last['forward']}/{last['jvp']}/"
-                     f"{last['vjp']} | {seconds['cpu']:.0f} / {seconds['wall']:.0f} | "
+                     f"{last['vjp']} | {_number(seconds['cpu'], '.0f')} / "
+                     f"{seconds['wall']:.0f} | "
                      f"{last['loss']:.4g} | {last['mse_t']:.5f} | " + " | ".join(cells)
                      + f" | {run['stop'].split(':')[0]} |")
     lines += ["", *(f"- {variant} skipped: {run['skipped']}" for variant, run in runs.items()
@@ -323,7 +409,13 @@ def verdict(label: str, runs: dict, reference: str, levels: dict, clock: str) ->
     lines = []
     for key, name in (("mse_t", "MSE_T"), ("loss", "objective")):
         level = levels["100%"][key]
-        own = first_reach(runs[reference]["rows"], key, level)[clock]
+        rows = runs[reference]["rows"]
+        own = first_reach(rows, key, level)[clock]
+        if any(math.isnan(row[key]) for row in rows):
+            ratio_note = (f" (at most: the reference's {name} was recorded only at its start "
+                          "and end)")
+        else:
+            ratio_note = ""
         reached = {variant: first_reach(run["rows"], key, level) for variant, run in runs.items()
                    if "skipped" not in run and variant != reference}
         reached = {variant: row for variant, row in reached.items() if row is not None}
@@ -333,7 +425,8 @@ def verdict(label: str, runs: dict, reference: str, levels: dict, clock: str) ->
             continue
         winner = min(reached, key=lambda variant: reached[variant][clock])
         time_won = reached[winner][clock]
-        ratio = f"{own / time_won:.1f}x sooner" if time_won < own else "no sooner"
+        ratio = (f"{own / time_won:.1f}x sooner{ratio_note}" if time_won < own
+                 else "no sooner")
         lines.append(f"- {label}: {winner} reaches the reference's final {name} {level:.4g} "
                      f"first, in {time_won:.1f} s of {clock} time against the reference's "
                      f"{own:.1f} s ({ratio})")
@@ -356,7 +449,11 @@ def plot(results: dict, path: Path, protocol: str, reference: str, clock: str) -
             times = [row[clock] for row in run["rows"]] + [run["seconds"][clock]]
             for row, key in ((0, "mse_t"), (1, "loss")):
                 values = [r[key] for r in run["rows"]] + [run["rows"][-1][key]]
-                axes[row, column].plot(times, values, marker=".", ms=3, color=colors[variant],
+                kept = [(t, v) for t, v in zip(times, values, strict=True) if not math.isnan(v)]
+                gaps = len(kept) < len(values)  # recorded at the ends only: dashed, big dots
+                axes[row, column].plot(*zip(*kept, strict=True), marker="o" if gaps else ".",
+                                       ms=6 if gaps else 3, ls="--" if gaps else "-",
+                                       color=colors[variant],
                                        lw=2.2 if variant == reference else 1.3)
                 if run["stop"].startswith(("failed", "cut off")):
                     axes[row, column].plot(times[-1], values[-1], "x", ms=8, mew=2,
@@ -397,6 +494,12 @@ def run_race(args, variants: dict) -> dict:
     built = build_problems(args.size, args.protocol, regularizers, args.lam)
     n_ref = args.reference_iterations or built["iterations"]
     reference = f"adam lr={built['lr']:g} (reference)"
+    recorded = None
+    if args.reference_run:
+        name, recorded = recorded_reference(args.reference_run, regularizers[0],
+                                            *built["problems"].values(),
+                                            built["mse_t_of_fields"])
+        reference, n_ref = f"{name} (reference)", recorded["rows"][-1]["iteration"]
     record = {"size": args.size, "protocol": args.protocol, "clock": args.clock,
               "budget_s": args.budget_s, "reference": reference, "reference_iterations": n_ref,
               "seconds": 0.0, "problems": {}}
@@ -404,8 +507,8 @@ def run_race(args, variants: dict) -> dict:
     for label, problem in built["problems"].items():
         warm_up(problem)
         print(f"{label}: {problem}", flush=True)
-        runs = {reference: race(problem, built["mse_t"], "adam", {"lr": built["lr"]}, n_ref,
-                                args.clock, None)}
+        runs = {reference: recorded or race(problem, built["mse_t"], "adam",
+                                            {"lr": built["lr"]}, n_ref, args.clock, None)}
         record["problems"][label] = {"lambda": problem.lam, "runs": runs,
                                      "levels": reference_levels(runs[reference]["rows"], n_ref)}
         for variant, (name, options) in variants.items():
@@ -471,6 +574,10 @@ def main():
                              "process (default; robust to other jobs) or wall seconds")
     parser.add_argument("--reference-iterations", type=int, default=None,
                         help="iterations of the reference Adam (default: the preset's)")
+    parser.add_argument("--reference-run", type=Path, default=None, metavar="DIR",
+                        help="take the reference from this finished `invflame reproduce` run "
+                             "of the raced method (one --regularizer, --clock wall) instead of "
+                             "running it")
     parser.add_argument("--merge", type=Path, nargs="+", default=None, metavar="DIR",
                         help="race nothing: report the races in these --out folders as one "
                              "(e.g. one regularizer each, run side by side)")
@@ -487,6 +594,10 @@ def main():
         parser.error(f"--lam takes KIND=VALUE pairs with KIND tikhonov or tv, got {args.lam}")
     if set(args.lam) - {"tikhonov", "tv"}:
         parser.error(f"--lam: unknown regularizer in {sorted(args.lam)}; use tikhonov or tv")
+    if args.reference_run and (args.regularizer == "both" or args.clock != "wall"
+                               or args.reference_iterations):
+        parser.error("--reference-run records one method's run in wall time: give one "
+                     "--regularizer, --clock wall and no --reference-iterations")
     if args.merge:
         report(merged([json.loads((d / "race.json").read_text()) for d in args.merge]),
                args.out)
