@@ -313,11 +313,42 @@ def _cotangents_numba(tables: RTETables, fields, lengths, radiance, cotangent):
     n_segments = segment_counts(lengths)
     shapes = (jax.ShapeDtypeStruct(amount.shape[:-1] + (n_tau + 1,), tables.dtype),
               jax.ShapeDtypeStruct(radiance.shape, tables.dtype))
-    d_weights, transmittance = jax.pure_callback(
+    d_weights, transmittance = _host_call(
         partial(sweep_vjp, n_gas=n_tau - int(tables.soot)), shapes, tables.coef, index,
-        amount, offset, n_segments, radiance, cotangent, vmap_method="sequential")
+        amount, offset, n_segments, radiance, cotangent)
     d_fields, d_lengths = to_inputs((d_weights[..., :n_tau], d_weights[..., n_tau]))
     return d_fields, d_lengths, transmittance
+
+
+def _host_call(fn, result_shapes, *args):
+    """``jax.pure_callback(fn, result_shapes, *args)`` that keeps 64-bit values 64-bit.
+
+    JAX calls ``fn`` on a thread of its own, where its 64-bit mode is off unless the process
+    turned it on (:func:`operators.base.precision` turns it on in the caller's thread only), and
+    would round float64 operands and results to float32 there. 64-bit arrays therefore cross as
+    pairs of uint32 and are viewed back on either side.
+    """
+    def wide(dtype):
+        return np.dtype(dtype).itemsize == 8
+
+    def send(x):
+        return jax.lax.bitcast_convert_type(x, jnp.uint32) if wide(x.dtype) else x
+
+    dtypes = [np.dtype(x.dtype) for x in args]
+
+    def on_host(*host_args):
+        values = fn(*(np.ascontiguousarray(x).view(dtype)[..., 0] if wide(dtype) else x
+                      for x, dtype in zip(host_args, dtypes, strict=True)))
+        return tuple(np.ascontiguousarray(v, shape.dtype).view(np.uint32).reshape(
+            *shape.shape, 2) if wide(shape.dtype) else v
+            for v, shape in zip(values, result_shapes, strict=True))
+
+    sent_shapes = tuple(jax.ShapeDtypeStruct((*s.shape, 2), jnp.uint32) if wide(s.dtype) else s
+                        for s in result_shapes)
+    results = jax.pure_callback(on_host, sent_shapes, *(send(jnp.asarray(x)) for x in args),
+                                vmap_method="sequential")
+    return tuple(jax.lax.bitcast_convert_type(r, s.dtype) if wide(s.dtype) else r
+                 for r, s in zip(results, result_shapes, strict=True))
 
 
 _radiance.defvjp(_radiance_fwd, _radiance_bwd)

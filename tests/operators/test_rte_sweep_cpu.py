@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from rte_reference import random_rays, synthetic_sigma
 
+from operators.base import precision
 from operators.rte_kernel import REVERSE_SWEEPS, emission_radiance, reverse_sweep
 from operators.rte_sweep_cpu import _exp_neg
 from operators.rte_tables import RTETables, rayleigh_soot_constant
@@ -23,7 +24,7 @@ def gradients(tables, fields, lengths, background, reverse):
         return jnp.sum(weights * emission_radiance(tables, f, s, 3, b, reverse=reverse))
 
     args = (jnp.asarray(a, tables.dtype) for a in (fields, lengths, background))
-    return jax.grad(loss, argnums=(0, 1, 2))(*args)
+    return jax.jit(jax.grad(loss, argnums=(0, 1, 2)))(*args)
 
 
 @pytest.mark.parametrize("dtype, rtol", [(np.float64, 1e-12), (np.float32, 2e-6)])
@@ -43,6 +44,24 @@ def test_numba_sweep_gives_the_gradients_of_the_xla_sweep(dtype, rtol, soot):
     padding = np.arange(lengths.shape[1]) >= np.count_nonzero(lengths, axis=1)[:, None]
     assert padding.any() and not np.any(ours[0][:, padding]) and not np.any(ours[1][padding])
     assert not np.any(xla[1][padding])
+
+
+def test_float64_stays_float64_with_64_bit_mode_in_the_callers_thread_only():
+    """`precision(float64)` turns on JAX's 64-bit mode in the calling thread only; JAX runs the
+    Numba sweep's host callback on a thread of its own, which must not round to float32."""
+    fields, lengths = random_rays(n_rays=7, n_seg=9, seed=5)
+    background = np.zeros((7, ETA.size))
+    jax.config.update("jax_enable_x64", False)
+    try:
+        with precision(np.float64):
+            tables = RTETables.from_spline(ETA, NODES, COEF, 101325.0, np.float64, "table")
+            xla = gradients(tables, fields, lengths, background, "xla")
+            ours = gradients(tables, fields, lengths, background, "numba")
+    finally:
+        jax.config.update("jax_enable_x64", True)
+    for a, b in zip(xla, ours, strict=True):
+        assert a.dtype == b.dtype == np.float64
+        assert np.max(np.abs(a - b)) <= 1e-12 * np.max(np.abs(a))
 
 
 def test_float32_exponential_is_within_four_units_in_the_last_place():
