@@ -50,11 +50,9 @@ from operators.rte_batches import (
     batched_inputs,
     from_batches,
     ray_order,
-    segment_counts,
     spectra_batches,
 )
 from operators.rte_kernel import emission_radiance, emission_radiance_jvp
-from operators.rte_sweep_cpu import sweep_vjp
 
 
 def resident_mib() -> float:
@@ -128,14 +126,9 @@ def stages(scene: Scene, fields, repeats: int, clock: str) -> dict:
         lambda a: rte_kernel._sweep_vjp(tables, *a[1], a[0], *a[2]), (n, b, s)))
     times["reverse sweep"] = best_time(lambda: reverse(n_segments, batches, spectra_in),
                                        repeats, clock)
-    index = rte_kernel._interval(tables, segment_fields[0])
-    species = 1 + np.asarray(tables.species, dtype=int)
-    amount, offset = (np.asarray(w) for w in rte_kernel._segment_weights(
-        tables, index, segment_fields[0], segment_fields[species], lengths)[:2])
-    host = [np.asarray(a) for a in (tables.coef, index, amount, offset,
-                                    segment_counts(lengths), radiance, cotangent)]
-    times["reverse sweep, Numba"] = best_time(
-        lambda: sweep_vjp(*host, n_gas=amount.shape[-1] - int(tables.soot)), repeats, clock)
+    sweep, inputs, _ = rte_kernel._numba_sweep(tables, segment_fields, lengths)
+    host = [np.asarray(a) for a in (*inputs, radiance, cotangent)]
+    times["reverse sweep, Numba"] = best_time(lambda: sweep(*host), repeats, clock)
 
     def batching(f, s, spectrum):
         out, to_inputs = jax.vjp(

@@ -39,7 +39,6 @@ idle machine), and a run whose start objective differs from the race problem's i
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import math
 import time
@@ -49,6 +48,7 @@ from pathlib import Path
 import matplotlib
 import matplotlib.lines
 import matplotlib.ticker
+import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -56,6 +56,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import operators  # noqa: E402
 import solvers  # noqa: E402
 from invflame.experiments import reproduce, runner  # noqa: E402
+from invflame.experiments.figures import read_history  # noqa: E402
 from invflame.experiments.metrics import normalized_mse  # noqa: E402
 from invflame.experiments.regularization import regularizer_weight  # noqa: E402
 from invflame.field import Field  # noqa: E402
@@ -309,8 +310,8 @@ def recorded_reference(run_dir: Path, kind: str, problem: solvers.Problem,
         iterate (a gradient step's), the objective, and MSE_T at the start and the end only
         (NaN between: the run did not record it); CPU seconds are NaN.
     """
-    paths = {name: run_dir / name for name in
-             ("config.toml", "history.csv", "summary.json", "reconstruction.npz")}
+    paths = {name: run_dir / name for name in ("config.toml", "history.csv", "summary.json",
+                                                "initial.npz", "reconstruction.npz")}
     missing = [name for name, path in paths.items() if not path.is_file()]
     if missing:
         raise SystemExit(f"--reference-run {run_dir}: no finished run there ({', '.join(missing)} "
@@ -320,23 +321,20 @@ def recorded_reference(run_dir: Path, kind: str, problem: solvers.Problem,
         raise SystemExit(f"--reference-run {run_dir} regularizes with "
                          f"{cfg['regularizer']['kind']!r}, the race with {kind!r}: pass the run "
                          "of the raced method (--regularizer)")
-    with paths["history.csv"].open() as handle:
-        history = [{key: float(value) for key, value in row.items()}
-                   for row in csv.DictReader(handle)]
+    history = read_history(paths["history.csv"])
     start = problem.evaluate(problem.x0).loss
-    if abs(history[0]["loss"] - start) > 1e-4 * abs(start):
-        raise SystemExit(f"--reference-run {run_dir} starts at objective {history[0]['loss']:.6g}, "
-                         f"the race problem at {start:.6g}: the run solved another problem "
-                         "(size, protocol, seed or λ differ)")
-    ends = (mse_t_of_fields(Field.load(run_dir / "initial.npz").values),
-            mse_t_of_fields(Field.load(paths["reconstruction.npz"]).values))
-    rows = []
-    for i, entry in enumerate(history):
-        k = round(entry["iteration"])
-        rows.append({"iteration": k, "cpu": math.nan, "wall": entry["time"] - history[0]["time"],
-                     "forward": k + 1, "jvp": 0, "vjp": k + 1, "loss": entry["loss"],
-                     "mse_t": ends[0] if i == 0 else ends[1] if i == len(history) - 1
-                     else math.nan})
+    if abs(history["loss"][0] - start) > 1e-4 * abs(start):
+        raise SystemExit(f"--reference-run {run_dir} starts at objective "
+                         f"{history['loss'][0]:.6g}, the race problem at {start:.6g}: the run "
+                         "solved another problem (size, protocol, seed or λ differ)")
+    mse_t = np.full(history["loss"].size, math.nan)
+    mse_t[[0, -1]] = [mse_t_of_fields(Field.load(paths[name]).values)
+                      for name in ("initial.npz", "reconstruction.npz")]
+    rows = [{"iteration": int(k), "cpu": math.nan, "wall": float(t - history["time"][0]),
+             "forward": int(k) + 1, "jvp": 0, "vjp": int(k) + 1, "loss": float(loss),
+             "mse_t": float(error)}
+            for k, t, loss, error in zip(np.rint(history["iteration"]), history["time"],
+                                         history["loss"], mse_t, strict=True)]
     summary = json.loads(paths["summary.json"].read_text())
     options = cfg["solver"].get("options", {})
     name = (f"{cfg['solver']['name']}" + (f" lr={options['lr']:g}" if "lr" in options else "")

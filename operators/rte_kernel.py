@@ -281,43 +281,67 @@ def _radiance_fwd(batch_rays, reverse, tables, fields, lengths, background=None)
 
 def _radiance_bwd(batch_rays, reverse, residuals, cotangent):
     tables, fields, lengths, radiance, background = residuals
-    if reverse == "numba" and tables.planck == "table":
-        d_fields, d_lengths, transmittance = _cotangents_numba(tables, fields, lengths,
-                                                               radiance, cotangent)
-        d_background = None if background is None else cotangent * transmittance
-        return (jax.tree_util.tree_map(jnp.zeros_like, tables), d_fields, d_lengths,
-                d_background)
+    cotangents = (_cotangents_numba if reverse == "numba" and tables.planck == "table"
+                  else partial(_cotangents_xla, batch_rays))
+    return (jax.tree_util.tree_map(jnp.zeros_like, tables),
+            *cotangents(tables, fields, lengths, radiance, cotangent, background is not None))
+
+
+def _cotangents_xla(batch_rays, tables: RTETables, fields, lengths, radiance, cotangent,
+                    has_background):
+    """Cotangents of the fields, lengths and background (None without one) by JAX's reverse
+    sweep, batch by batch."""
     order, n_segments = ray_order(lengths, batch_rays)
     batches, to_inputs = jax.vjp(
         lambda f, s: batched_inputs(tables, f, s, order, batch_rays), fields, lengths)
     spectra = tuple(spectra_batches(a, order, batch_rays) for a in (radiance, cotangent))
     grads, d_background = jax.lax.map(
-        lambda b: _batch_cotangent(tables, background is not None, *b),
+        lambda b: _batch_cotangent(tables, has_background, *b),
         (*batches, n_segments, *spectra))
     d_fields, d_lengths = to_inputs(grads)
     d_lengths = jnp.where(jnp.arange(lengths.shape[1]) < segment_counts(lengths)[:, None],
                           d_lengths, 0)  # a batch sweeps its rays' padding too: not theirs
-    d_background = None if background is None else from_batches(d_background, order)
-    return jax.tree_util.tree_map(jnp.zeros_like, tables), d_fields, d_lengths, d_background
+    return d_fields, d_lengths, from_batches(d_background, order) if has_background else None
 
 
-def _cotangents_numba(tables: RTETables, fields, lengths, radiance, cotangent):
-    """The reverse sweep of all rays by :func:`operators.rte_sweep_cpu.sweep_vjp` (a host
-    callback), its weights' cotangents carried to the fields and lengths by JAX."""
-    index = _interval(tables, fields[0])
-    species = 1 + np.asarray(tables.species, dtype=int)
-    weights, to_inputs = jax.vjp(
-        lambda f, s: _segment_weights(tables, index, f[0], f[species], s)[:2], fields, lengths)
-    amount, offset = weights
+def _cotangents_numba(tables: RTETables, fields, lengths, radiance, cotangent, has_background):
+    """Cotangents of the fields, lengths and background (None without one) by the reverse
+    sweep of :mod:`operators.rte_sweep_cpu` (a host callback), the weights' cotangents
+    carried to the fields and lengths by JAX."""
+    sweep, inputs, to_inputs = _numba_sweep(tables, fields, lengths)
+    amount = inputs[2]
     n_tau = amount.shape[-1]
-    n_segments = segment_counts(lengths)
     shapes = (jax.ShapeDtypeStruct(amount.shape[:-1] + (n_tau + 1,), tables.dtype),
               jax.ShapeDtypeStruct(radiance.shape, tables.dtype))
-    d_weights, transmittance = _host_call(
-        partial(sweep_vjp, n_gas=n_tau - int(tables.soot)), shapes, tables.coef, index,
-        amount, offset, n_segments, radiance, cotangent)
+    d_weights, transmittance = _host_call(sweep, shapes, *inputs, radiance, cotangent)
     d_fields, d_lengths = to_inputs((d_weights[..., :n_tau], d_weights[..., n_tau]))
-    return d_fields, d_lengths, transmittance
+    return d_fields, d_lengths, cotangent * transmittance if has_background else None
+
+
+def _numba_sweep(tables: RTETables, fields, lengths):
+    """The Numba reverse sweep set up for segment fields ``(n_fields, n_rays, n_seg)``.
+
+    Returns
+    -------
+    sweep : callable
+        :func:`operators.rte_sweep_cpu.sweep_vjp` with its ``n_gas``; call it as
+        ``sweep(*inputs, radiance, cotangent)``.
+    inputs : tuple of jax.Array
+        The table coefficients, each segment's temperature interval, amounts and offset, and
+        each ray's segment count.
+    to_inputs : callable
+        Pullback of the amounts and offset to ``(fields, lengths)``.
+    """
+    index = _interval(tables, fields[0])
+    species = 1 + np.asarray(tables.species, dtype=int)
+    (amount, offset), to_inputs = jax.vjp(
+        lambda f, s: _segment_weights(tables, index, f[0], f[species], s)[:2], fields, lengths)
+    sweep = partial(sweep_vjp, n_gas=amount.shape[-1] - int(tables.soot))
+    return sweep, (tables.coef, index, amount, offset, segment_counts(lengths)), to_inputs
+
+
+def _wide(dtype) -> bool:
+    return np.dtype(dtype).itemsize == 8
 
 
 def _host_call(fn, result_shapes, *args):
@@ -328,26 +352,30 @@ def _host_call(fn, result_shapes, *args):
     would round float64 operands and results to float32 there. 64-bit arrays therefore cross as
     pairs of uint32 and are viewed back on either side.
     """
-    def wide(dtype):
-        return np.dtype(dtype).itemsize == 8
-
-    def send(x):
-        return jax.lax.bitcast_convert_type(x, jnp.uint32) if wide(x.dtype) else x
-
     dtypes = [np.dtype(x.dtype) for x in args]
 
-    def on_host(*host_args):
-        values = fn(*(np.ascontiguousarray(x).view(dtype)[..., 0] if wide(dtype) else x
-                      for x, dtype in zip(host_args, dtypes, strict=True)))
-        return tuple(np.ascontiguousarray(v, shape.dtype).view(np.uint32).reshape(
-            *shape.shape, 2) if wide(shape.dtype) else v
-            for v, shape in zip(values, result_shapes, strict=True))
+    def unpack(x, dtype):  # on the host: uint32 pairs -> 64-bit values
+        return np.ascontiguousarray(x).view(dtype)[..., 0] if _wide(dtype) else x
 
-    sent_shapes = tuple(jax.ShapeDtypeStruct((*s.shape, 2), jnp.uint32) if wide(s.dtype) else s
-                        for s in result_shapes)
-    results = jax.pure_callback(on_host, sent_shapes, *(send(jnp.asarray(x)) for x in args),
+    def pack(x, dtype):  # on the host: 64-bit values -> uint32 pairs
+        if not _wide(dtype):
+            return x
+        x = np.ascontiguousarray(x, dtype)
+        return x.view(np.uint32).reshape(*x.shape, 2)
+
+    def on_host(*packed):
+        values = fn(*(unpack(x, d) for x, d in zip(packed, dtypes, strict=True)))
+        return tuple(pack(v, s.dtype) for v, s in zip(values, result_shapes, strict=True))
+
+    def send(x):
+        x = jnp.asarray(x)
+        return jax.lax.bitcast_convert_type(x, jnp.uint32) if _wide(x.dtype) else x
+
+    packed_shapes = tuple(jax.ShapeDtypeStruct((*s.shape, 2), jnp.uint32) if _wide(s.dtype)
+                          else s for s in result_shapes)
+    results = jax.pure_callback(on_host, packed_shapes, *(send(x) for x in args),
                                 vmap_method="sequential")
-    return tuple(jax.lax.bitcast_convert_type(r, s.dtype) if wide(s.dtype) else r
+    return tuple(jax.lax.bitcast_convert_type(r, s.dtype) if _wide(s.dtype) else r
                  for r, s in zip(results, result_shapes, strict=True))
 
 
