@@ -1,12 +1,13 @@
 """Time per epoch and memory of the ``paper`` preset, measured over a few epochs.
 
-Runs VG/TV and NN/Tikh. of ``invflame reproduce --preset paper`` (60³ voxels, four cameras of
-32×32 pixels, 650–725 cm⁻¹ at 0.04 cm⁻¹) for ``--epochs`` epochs each through the same runner
+Runs VG/TV and NN/Tikh. (or all six methods with ``--all``) of ``invflame reproduce --preset
+paper`` (60³ voxels, four cameras of 32×32 pixels, 650–725 cm⁻¹ at 0.04 cm⁻¹) for ``--epochs``
+epochs each through the same runner
 as the full comparison (pretraining shortened to ``--pretrain`` steps: it does not change the
 cost of an epoch), and prints seconds per epoch, parameter memory and the process's peak
 resident memory, next to the paper's Table 1 (GPU, 2000 epochs).
 
-    python benchmarks/bench_paper_epoch.py [--epochs 3] [--pretrain 50] [--out DIR]
+    python benchmarks/bench_paper_epoch.py [--epochs 3] [--pretrain 50] [--out DIR] [--all]
 """
 
 import argparse
@@ -23,30 +24,27 @@ def main():
     parser.add_argument("--epochs", type=int, default=3)
     parser.add_argument("--pretrain", type=int, default=50)
     parser.add_argument("--out", type=Path, default=None)
-    parser.add_argument("--method", choices=["VG/TV", "NN/Tikh."],
+    parser.add_argument("--method", choices=list(reproduce.METHODS),
                         help="measure one method in this process (default: each in its own "
                         "process, so that peak memories are separate)")
+    parser.add_argument("--all", action="store_true",
+                        help="all six methods (default: VG/TV and NN/Tikh.)")
     args = parser.parse_args()
     out = args.out or Path(tempfile.mkdtemp(prefix="invflame-paper-epoch-"))
     if args.method is None:
-        for method in ("VG/TV", "NN/Tikh."):
+        for method in reproduce.METHODS if args.all else ("VG/TV", "NN/Tikh."):
             subprocess.run([sys.executable, __file__, "--method", method, "--epochs",
                             str(args.epochs), "--pretrain", str(args.pretrain), "--out",
                             str(out)], check=True)
         return
     cfg = reproduce.method_config("paper", args.method)
-    if cfg["representation"]["kind"] == "neural-field":
-        rays = 4 * cfg["rig"]["pixels"] ** 2
-        batches = max(1, rays // cfg["representation"]["rays_per_batch"])
-    else:
-        batches = 1
-    cfg["solver"]["iterations"] = args.epochs * batches
+    cfg["solver"]["iterations"] = args.epochs  # the runner counts a solver's iterations in epochs
     cfg["representation"]["pretrain_iterations"] = args.pretrain
     summary = runner.run_experiment(cfg, out / reproduce.folder_name(args.method),
                                     progress=False)
     paper = reproduce.PAPER_TABLE[args.method]
     print(f"{args.method:>9}: {summary['seconds_per_epoch']:.2f} s per epoch "
-          f"({summary['iterations']} iterations), parameters "
+          f"({summary['epochs']:g} epochs, {summary['iterations']} iterations), parameters "
           f"{summary['parameter_memory_mb']:.2f} MB, process peak "
           f"{summary['peak_memory_mb']:.0f} MB   [paper, GPU: {paper[0]} ms, {paper[1]} MB]",
           flush=True)

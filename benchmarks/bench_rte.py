@@ -14,9 +14,8 @@ the repeats:
   sweep, value and tangent together), as Gauss–Newton and PDHG use it;
 * kernel forward, VJP, JVP: the emission kernel alone on the scene's segment fields
   (:func:`~operators.rte_kernel.emission_radiance`, its pullback of a given cotangent with the
-  value, :func:`~operators.rte_kernel.emission_radiance_jvp`); the VJP with the default reverse
-  sweep (:func:`~operators.rte_kernel.reverse_sweep`: Numba's on one CPU device) and with
-  XLA's;
+  value, :func:`~operators.rte_kernel.emission_radiance_jvp`), each with the default sweeps
+  (:func:`~operators.rte_kernel.choose_sweeps`: Numba's on one CPU device) and with XLA's;
 * exp-only: a jitted ``exp`` over as many float32 elements, in the same ray batches and
   the same number of segment steps per batch as the kernel;
 * with ``--stages``, the stages of the kernel, each a jitted loop over the same batches and
@@ -31,12 +30,18 @@ the repeats:
 sweeps the padding of each batch (rays sorted by segment count), reported as "swept".
 Peak memory is the process's peak resident set size (``resource.getrusage``): at the end, once
 the scene was built, and after exp-only, forward and forward+VJP, before anything else is
-built (what a voxel reconstruction needs); and XLA's temporary buffers of the compiled forward+VJP.
+built; and XLA's temporary buffers of the compiled forward+VJP. Last, ``bench_memory.py`` runs
+in a process of its own on the same grid, cameras and rays and prints what a voxel
+reconstruction's process holds: scene, data and gradient epochs only, the allocator set as the
+``invflame`` command sets it.
 """
 
 import argparse
 import resource
+import subprocess
+import sys
 from functools import partial
+from pathlib import Path
 
 import jax
 import jax.numpy as jnp
@@ -147,23 +152,27 @@ def kernel_calls(scene: Scene, fields, direction) -> dict:
     tables, batch_rays = scene.tables, scene.batch_rays
     lengths = jnp.asarray(scene.segments.length, tables.dtype)
     segment_fields = jnp.asarray(scene.sampling(np.asarray(fields)), tables.dtype)
-    tangent = jnp.asarray(scene.sampling(direction.reshape(fields.shape)), tables.dtype)
+    tangent_fields = jnp.asarray(scene.sampling(direction.reshape(fields.shape)),
+                                 tables.dtype)
     cotangent = jnp.ones((lengths.shape[0], tables.n_eta), tables.dtype)
 
-    def radiance(f, reverse=None):
-        return emission_radiance(tables, f, lengths, batch_rays, reverse=reverse)
+    def radiance(f, sweeps=None):
+        return emission_radiance(tables, f, lengths, batch_rays, sweeps=sweeps)
 
-    def pullback(reverse):
-        return jax.jit(lambda f: jax.vjp(partial(radiance, reverse=reverse), f)[1](cotangent))
+    def pullback(sweeps):
+        return jax.jit(lambda f: jax.vjp(partial(radiance, sweeps=sweeps), f)[1](cotangent))
 
-    default, xla = pullback(None), pullback("xla")
-    return {
-        "kernel forward": lambda: radiance(segment_fields),
-        "kernel VJP": lambda: default(segment_fields),
-        "kernel VJP, XLA sweep": lambda: xla(segment_fields),
-        "kernel JVP": lambda: emission_radiance_jvp(tables, segment_fields, lengths, tangent,
-                                                    jnp.zeros_like(lengths), batch_rays),
-    }
+    def tangent(sweeps):
+        return lambda: emission_radiance_jvp(tables, segment_fields, lengths, tangent_fields,
+                                             jnp.zeros_like(lengths), batch_rays,
+                                             sweeps=sweeps)
+
+    calls = {}
+    for sweeps, label in ((None, ""), ("xla", ", XLA sweeps")):
+        calls[f"kernel forward{label}"] = partial(radiance, segment_fields, sweeps)
+        calls[f"kernel VJP{label}"] = partial(pullback(sweeps), segment_fields)
+        calls[f"kernel JVP{label}"] = tangent(sweeps)
+    return calls
 
 
 def main() -> None:
@@ -235,6 +244,10 @@ def main() -> None:
     print(f"peak memory: {peak:.0f} MiB resident ({built:.0f} MiB once the scene was built, "
           f"{epoch_peak:.0f} MiB after forward and forward+VJP); XLA temporaries of "
           f"forward+VJP {temp / 2**20:.0f} MiB")
+    scene_args = ["--cells", str(args.cells), "--pixels", str(args.pixels),
+                  "--rays-per-pixel", str(args.rays_per_pixel), "--phantom", args.phantom]
+    subprocess.run([sys.executable, str(Path(__file__).with_name("bench_memory.py")),
+                    *scene_args], check=True)
 
 
 if __name__ == "__main__":

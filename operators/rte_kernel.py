@@ -50,14 +50,18 @@ and :math:`B = \tilde B(u)`; so the sums over wavenumber are taken of the physic
 :math:`\sum_\eta (g_\tau \partial_u\tau + g_B \partial_u B)` (``n_gas + 1`` sums per
 segment, not one per spline coefficient, four per gas and four for :math:`B`); JAX then
 carries them to :math:`(T_k, X_{s,k}, \Delta s_k)` through the scalar weights
-:math:`(a_s, u)`. On the CPU backend the same sweep runs compiled by Numba, one ray at a time
-with its spectra in cache (:mod:`operators.rte_sweep_cpu`, :func:`reverse_sweep`); XLA's CPU
-backend writes each intermediate spectrum of a ray batch to memory instead. Forward-mode
-derivatives (JVPs) run JAX's forward mode through the forward sweep, with the same memory.
-``docs/performance.md`` has the measured costs.
+:math:`(a_s, u)`. Forward-mode derivatives (JVPs) carry the tangents through the forward
+sweep, with the same memory (JAX's forward mode through the XLA sweep).
 
-**Layout.** Rays are sorted by their number of segments and processed in batches
-(:mod:`operators.rte_batches`), each batch sweeping only as many segments as its longest ray.
+**Two implementations** of the sweeps (:func:`choose_sweeps`): JAX's below, lowered by XLA for
+any backend, and, the default on one CPU device, the same three sweeps compiled by Numba (the
+forward-mode one written out, not JAX's), one ray at a time with its spectra in cache, called
+as host callbacks (:mod:`operators.rte_sweep_cpu`); XLA's CPU backend writes each intermediate
+spectrum of a ray batch to memory instead. ``docs/performance.md`` has the measured costs.
+
+**Layout** of the XLA sweeps. Rays are sorted by their number of segments and processed in
+batches (:mod:`operators.rte_batches`), each batch sweeping only as many segments as its
+longest ray.
 Per segment, :math:`\tilde\sigma_s` and :math:`\tilde B` are Horner sums of gathered rows
 of the spectral tables (:mod:`operators.rte_tables`), fused by XLA into the sweep.
 ``benchmarks/bench_rte.py`` times the kernel and its stages against a bare exponential.
@@ -83,7 +87,7 @@ from operators.rte_batches import (
     segment_counts,
     spectra_batches,
 )
-from operators.rte_sweep_cpu import sweep_vjp
+from operators.rte_sweep_cpu import sweep, sweep_jvp, sweep_vjp
 from operators.rte_tables import RTETables
 
 
@@ -269,22 +273,68 @@ def _radiance_impl(batch_rays, tables, fields, lengths, background=None):
     return from_batches(out, order)
 
 
-@partial(jax.custom_vjp, nondiff_argnums=(0, 1))
-def _radiance(batch_rays, reverse, tables, fields, lengths, background=None):
+def _numba(sweeps: str, tables: RTETables) -> bool:
+    """Whether the Numba sweeps run: chosen, and the Planck spline (they have no exact law)."""
+    return sweeps == "numba" and tables.planck == "table"
+
+
+def _forward(batch_rays, sweeps, tables, fields, lengths, background=None):
+    """The radiance by the chosen sweeps (:func:`choose_sweeps`), not differentiable."""
+    if _numba(sweeps, tables):
+        return _radiance_numba(tables, fields, lengths, background)
     return _radiance_impl(batch_rays, tables, fields, lengths, background)
 
 
-def _radiance_fwd(batch_rays, reverse, tables, fields, lengths, background=None):
-    radiance = _radiance_impl(batch_rays, tables, fields, lengths, background)
+@partial(jax.custom_vjp, nondiff_argnums=(0, 1))
+def _radiance(batch_rays, sweeps, tables, fields, lengths, background=None):
+    return _forward(batch_rays, sweeps, tables, fields, lengths, background)
+
+
+def _radiance_fwd(batch_rays, sweeps, tables, fields, lengths, background=None):
+    radiance = _forward(batch_rays, sweeps, tables, fields, lengths, background)
     return radiance, (tables, fields, lengths, radiance, background)
 
 
-def _radiance_bwd(batch_rays, reverse, residuals, cotangent):
+def _radiance_bwd(batch_rays, sweeps, residuals, cotangent):
     tables, fields, lengths, radiance, background = residuals
-    cotangents = (_cotangents_numba if reverse == "numba" and tables.planck == "table"
+    cotangents = (_cotangents_numba if _numba(sweeps, tables)
                   else partial(_cotangents_xla, batch_rays))
     return (jax.tree_util.tree_map(jnp.zeros_like, tables),
             *cotangents(tables, fields, lengths, radiance, cotangent, background is not None))
+
+
+def _radiance_forward_mode(batch_rays, sweeps, tables, fields, lengths, background=None):
+    """The radiance, differentiable in forward mode: JAX's JVP through the XLA sweep, or
+    :func:`_radiance_tangent` (the Numba forward-mode sweep) as custom JVP."""
+    if _numba(sweeps, tables):
+        return _radiance_tangent(tables, fields, lengths, background)
+    return _radiance_impl(batch_rays, tables, fields, lengths, background)
+
+
+@jax.custom_jvp
+def _radiance_tangent(tables, fields, lengths, background=None):
+    return _radiance_numba(tables, fields, lengths, background)
+
+
+@_radiance_tangent.defjvp
+def _radiance_tangent_jvp(primals, tangents):
+    """Radiance and tangent in one Numba sweep; the tables are held fixed (their tangents,
+    zero wherever the kernel is used, are not read)."""
+    tables, fields, lengths, background = primals
+    _, d_fields, d_lengths, d_background = tangents
+    index, weights = _numba_weights(tables, fields)
+    (amount, offset), (d_amount, d_offset) = jax.jvp(weights, (fields, lengths),
+                                                     (d_fields, d_lengths))
+    backgrounds = () if background is None else (background, d_background)
+
+    def on_host(coef, index, amount, offset, counts, d_amount, d_offset, *backgrounds):
+        background, d_background = backgrounds or (None, None)
+        return sweep_jvp(coef, index, amount, offset, counts, background, d_amount, d_offset,
+                         d_background, n_gas=_n_gas(tables, amount))
+
+    shape = _spectra_shape(tables, lengths)
+    return _host_call(on_host, (shape, shape), tables.coef, index, amount, offset,
+                      segment_counts(lengths), d_amount, d_offset, *backgrounds)
 
 
 def _cotangents_xla(batch_rays, tables: RTETables, fields, lengths, radiance, cotangent,
@@ -304,16 +354,46 @@ def _cotangents_xla(batch_rays, tables: RTETables, fields, lengths, radiance, co
     return d_fields, d_lengths, from_batches(d_background, order) if has_background else None
 
 
+# -- the Numba sweeps (operators.rte_sweep_cpu) as host callbacks ------------------------------
+def _numba_weights(tables: RTETables, fields):
+    """Each segment's temperature interval, and the map ``(fields, lengths) -> (amount,
+    offset)`` to the weights the Numba sweeps take (differentiable by JAX)."""
+    index = _interval(tables, fields[0])
+    species = 1 + np.asarray(tables.species, dtype=int)
+    return index, lambda f, s: _segment_weights(tables, index, f[0], f[species], s)[:2]
+
+
+def _n_gas(tables: RTETables, amount) -> int:
+    return amount.shape[-1] - int(tables.soot)
+
+
+def _spectra_shape(tables: RTETables, lengths):
+    return jax.ShapeDtypeStruct((lengths.shape[0], tables.n_eta), tables.dtype)
+
+
+def _radiance_numba(tables: RTETables, fields, lengths, background):
+    """The radiance by the forward sweep of :mod:`operators.rte_sweep_cpu`."""
+    index, weights = _numba_weights(tables, fields)
+    amount, offset = weights(fields, lengths)
+    backgrounds = () if background is None else (background,)
+    (radiance,) = _host_call(lambda *a: (sweep(*a, n_gas=_n_gas(tables, amount)),),
+                             (_spectra_shape(tables, lengths),), tables.coef, index, amount,
+                             offset, segment_counts(lengths), *backgrounds)
+    return radiance
+
+
 def _cotangents_numba(tables: RTETables, fields, lengths, radiance, cotangent, has_background):
     """Cotangents of the fields, lengths and background (None without one) by the reverse
-    sweep of :mod:`operators.rte_sweep_cpu` (a host callback), the weights' cotangents
-    carried to the fields and lengths by JAX."""
+    sweep of :mod:`operators.rte_sweep_cpu`, the weights' cotangents carried to the fields
+    and lengths by JAX."""
     sweep, inputs, to_inputs = _numba_sweep(tables, fields, lengths)
     amount = inputs[2]
     n_tau = amount.shape[-1]
+    n_rays = lengths.shape[0] if has_background else 0
     shapes = (jax.ShapeDtypeStruct(amount.shape[:-1] + (n_tau + 1,), tables.dtype),
-              jax.ShapeDtypeStruct(radiance.shape, tables.dtype))
-    d_weights, transmittance = _host_call(sweep, shapes, *inputs, radiance, cotangent)
+              jax.ShapeDtypeStruct((n_rays, tables.n_eta), tables.dtype))
+    d_weights, transmittance = _host_call(partial(sweep, with_transmittance=has_background),
+                                          shapes, *inputs, radiance, cotangent)
     d_fields, d_lengths = to_inputs((d_weights[..., :n_tau], d_weights[..., n_tau]))
     return d_fields, d_lengths, cotangent * transmittance if has_background else None
 
@@ -332,11 +412,9 @@ def _numba_sweep(tables: RTETables, fields, lengths):
     to_inputs : callable
         Pullback of the amounts and offset to ``(fields, lengths)``.
     """
-    index = _interval(tables, fields[0])
-    species = 1 + np.asarray(tables.species, dtype=int)
-    (amount, offset), to_inputs = jax.vjp(
-        lambda f, s: _segment_weights(tables, index, f[0], f[species], s)[:2], fields, lengths)
-    sweep = partial(sweep_vjp, n_gas=amount.shape[-1] - int(tables.soot))
+    index, weights = _numba_weights(tables, fields)
+    (amount, offset), to_inputs = jax.vjp(weights, fields, lengths)
+    sweep = partial(sweep_vjp, n_gas=_n_gas(tables, amount))
     return sweep, (tables.coef, index, amount, offset, segment_counts(lengths)), to_inputs
 
 
@@ -383,34 +461,34 @@ _radiance.defvjp(_radiance_fwd, _radiance_bwd)
 _radiance_jit = jax.jit(_radiance, static_argnums=(0, 1))
 
 
-#: The reverse sweeps: JAX's, lowered by XLA for any backend, and the Numba one for CPUs
-#: (:mod:`operators.rte_sweep_cpu`, which needs the Planck spline; with the exact Planck law
-#: the XLA one runs).
-REVERSE_SWEEPS = ("xla", "numba")
+#: The implementations of the sweeps (forward, forward-mode and reverse): JAX's, lowered by
+#: XLA for any backend, and the Numba ones for CPUs (:mod:`operators.rte_sweep_cpu`, which need
+#: the Planck spline; with the exact Planck law the XLA ones run).
+SWEEPS = ("xla", "numba")
 
 
-def reverse_sweep(name: str | None = None) -> str:
-    """The reverse sweep to use: ``name`` checked, or by default ``"numba"`` where JAX runs
-    on one CPU device (its kernel VJP took 0.55 × the time of XLA's at the paper's size,
+def choose_sweeps(name: str | None = None) -> str:
+    """The sweeps to use: ``name`` checked, or by default ``"numba"`` where JAX runs on one
+    CPU device (at the paper's size its forward, JVP and VJP each took less time than XLA's,
     ``docs/performance.md``) and ``"xla"`` elsewhere: on other backends, and on several CPU
-    devices in one process, where the Numba sweep's host callbacks, called from the devices'
+    devices in one process, where the Numba sweeps' host callbacks, called from the devices'
     threads, deadlock the sharded kernel's collectives (``tests/operators/sharding_check.py``
     aborts in XLA's all-reduce).
 
     Raises
     ------
     ValueError
-        For a name not in :data:`REVERSE_SWEEPS`.
+        For a name not in :data:`SWEEPS`.
     """
     if name is None:
         one_cpu = jax.default_backend() == "cpu" and jax.local_device_count() == 1
         return "numba" if one_cpu else "xla"
-    if name not in REVERSE_SWEEPS:
-        raise ValueError(f"unknown reverse sweep {name!r}; choose one of {REVERSE_SWEEPS}")
+    if name not in SWEEPS:
+        raise ValueError(f"unknown sweeps {name!r}; choose one of {SWEEPS}")
     return name
 
 
-def radiance_kernel(batch_rays: int, forward_mode: bool = False, reverse: str | None = None):
+def radiance_kernel(batch_rays: int, forward_mode: bool = False, sweeps: str | None = None):
     """The kernel as a JAX function ``radiance(tables, fields, lengths, background=None)``,
     unchecked.
 
@@ -420,14 +498,14 @@ def radiance_kernel(batch_rays: int, forward_mode: bool = False, reverse: str | 
     Parameters
     ----------
     batch_rays : int
-        Rays per batch (static).
+        Rays per batch of the XLA sweeps (static).
     forward_mode : bool, optional
         False (default): reverse-mode differentiable through the memory-lean custom VJP (no
         forward mode: JAX cannot push tangents through a custom VJP). True: forward-mode
-        differentiable, JAX's JVP through the forward sweep (no reverse mode: the sweep's
-        trip count is not static). Both give the same radiance.
-    reverse : {"xla", "numba"}, optional
-        The reverse sweep of the custom VJP (default: :func:`reverse_sweep`).
+        differentiable (no reverse mode), by the forward-mode sweep (:func:`emission_radiance_jvp`).
+        Both give the same radiance.
+    sweeps : {"xla", "numba"}, optional
+        The sweeps' implementation (default: :func:`choose_sweeps`).
 
     Returns
     -------
@@ -435,13 +513,12 @@ def radiance_kernel(batch_rays: int, forward_mode: bool = False, reverse: str | 
         ``radiance(tables, fields, lengths, background=None) -> (n_rays, n_eta)`` in
         W/(m²·sr·cm⁻¹).
     """
-    if forward_mode:
-        return partial(_radiance_impl, int(batch_rays))
-    return partial(_radiance, int(batch_rays), reverse_sweep(reverse))
+    kernel = _radiance_forward_mode if forward_mode else _radiance
+    return partial(kernel, int(batch_rays), choose_sweeps(sweeps))
 
 
 def emission_radiance(tables: RTETables, fields, lengths, batch_rays: int | None = None,
-                      background=None, reverse: str | None = None):
+                      background=None, sweeps: str | None = None):
     """Spectral radiance leaving each ray's near end: the emission kernel, a JAX function.
 
     Differentiable in reverse mode with a memory-lean custom VJP (w.r.t. ``fields``,
@@ -459,12 +536,13 @@ def emission_radiance(tables: RTETables, fields, lengths, batch_rays: int | None
     lengths : jax.Array, shape (n_rays, n_seg)
         Segment lengths in m; zero on padding.
     batch_rays : int, optional
-        Rays per batch (default from :func:`batch_rays_for`).
+        Rays per batch of the XLA sweeps (default from :func:`batch_rays_for`).
     background : jax.Array, shape (n_rays, n_eta) or (n_eta,), optional
         Radiance behind each ray's far end in W/(m²·sr·cm⁻¹), seen through the ray's
         transmittance (default None: none, as zero but without the cost).
-    reverse : {"xla", "numba"}, optional
-        The reverse sweep of the VJP (default: :func:`reverse_sweep`); same values.
+    sweeps : {"xla", "numba"}, optional
+        The sweeps' implementation (default: :func:`choose_sweeps`); the same values to
+        rounding.
 
     Returns
     -------
@@ -474,17 +552,18 @@ def emission_radiance(tables: RTETables, fields, lengths, batch_rays: int | None
     fields, lengths, background = _check_inputs(tables, fields, lengths, background)
     if batch_rays is None:
         batch_rays = batch_rays_for(tables, lengths.shape[0])
-    return _radiance_jit(int(batch_rays), reverse_sweep(reverse), tables, fields, lengths,
+    return _radiance_jit(int(batch_rays), choose_sweeps(sweeps), tables, fields, lengths,
                          background)
 
 
 def emission_radiance_jvp(tables: RTETables, fields, lengths, d_fields, d_lengths,
-                          batch_rays: int | None = None, background=None):
+                          batch_rays: int | None = None, background=None,
+                          sweeps: str | None = None):
     """Radiance and its directional derivative (forward mode), memory as the forward.
 
     Parameters
     ----------
-    tables, fields, lengths, batch_rays, background
+    tables, fields, lengths, batch_rays, background, sweeps
         As in :func:`emission_radiance` (the background held fixed).
     d_fields, d_lengths : jax.Array
         Tangents, shaped as ``fields`` and ``lengths``.
@@ -499,14 +578,16 @@ def emission_radiance_jvp(tables: RTETables, fields, lengths, d_fields, d_length
         batch_rays = batch_rays_for(tables, lengths.shape[0])
     d_fields = jnp.asarray(d_fields, tables.dtype)
     d_lengths = jnp.asarray(d_lengths, tables.dtype)
-    return _radiance_jvp_jit(int(batch_rays), tables, fields, lengths, d_fields, d_lengths,
-                             background)
+    return _radiance_jvp_jit(int(batch_rays), choose_sweeps(sweeps), tables, fields, lengths,
+                             d_fields, d_lengths, background)
 
 
-@partial(jax.jit, static_argnums=0)
-def _radiance_jvp_jit(batch_rays, tables, fields, lengths, d_fields, d_lengths, background):
-    return jax.jvp(lambda f, s: _radiance_impl(batch_rays, tables, f, s, background),
-                   (fields, lengths), (d_fields, d_lengths))
+@partial(jax.jit, static_argnums=(0, 1))
+def _radiance_jvp_jit(batch_rays, sweeps, tables, fields, lengths, d_fields, d_lengths,
+                      background):
+    return jax.jvp(
+        lambda f, s: _radiance_forward_mode(batch_rays, sweeps, tables, f, s, background),
+        (fields, lengths), (d_fields, d_lengths))
 
 
 def _check_inputs(tables: RTETables, fields, lengths, background=None):

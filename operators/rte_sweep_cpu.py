@@ -1,19 +1,20 @@
-r"""The emission kernel's reverse sweep compiled for CPUs by Numba: one pass over memory.
+r"""The emission kernel's sweeps compiled for CPUs by Numba: forward, forward-mode, reverse.
 
-The reverse sweep of :mod:`operators.rte_kernel` (module notes there: the derivatives, the
-segment weights, the table rows) needs, per segment of a ray, the optical depth and Planck
-spectra from gathered table rows, the running sums :math:`P_k` and :math:`I_{\le k}`, and
+The sweeps of :mod:`operators.rte_kernel` (module notes there: the derivatives, the segment
+weights, the table rows) need, per segment of a ray, the optical depth and Planck spectra
+from gathered table rows and the running products :math:`P_k`; the forward-mode sweep also
+the tangents of the optical depth, the reverse sweep the running sums :math:`I_{\le k}` and
 ``n_tau + 1`` sums over wavenumber. XLA's CPU backend does not fuse a gathered row into its
 several consumers and writes each intermediate spectrum of a ray batch to memory; here one ray
-is swept at a time, its spectra (a few KiB each) stay in the core's cache, and the table rows
-are read twice per segment: once for :math:`\tau` and :math:`\partial\tau/\partial u`, once
-for the sums. Rays run in parallel over the CPU's cores (``numba.prange``).
+is swept at a time, camera side first, its spectra (a few KiB each) stay in the core's cache,
+and each table row is read once per segment. Rays run in parallel over the CPU's cores
+(``numba.prange``), longest first.
 
-float32 uses a vectorizable exponential (:func:`_exp_neg`, the Cephes ``expf`` polynomial)
-and the kernel's absorptance series; float64 uses ``math.exp`` and ``expm1``. The JAX reverse
-sweep (:func:`operators.rte_kernel._sweep_vjp`) stays the one of other backends and the
-reference this one is tested against (``tests/operators/test_rte_sweep_cpu.py``);
-``benchmarks/bench_rte.py`` times both.
+float32 uses a vectorizable exponential (:func:`_expm1_parts`, the Cephes ``expf``
+polynomial) that gives the absorptance :math:`1 - e^{-\tau}` without cancellation from the same
+polynomial; float64 uses ``math.exp`` and ``expm1``. The XLA sweeps of
+:mod:`operators.rte_kernel` stay those of other backends and the reference these are tested
+against (``tests/operators/test_rte_sweep_cpu.py``); ``benchmarks/bench_rte.py`` times both.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from llvmlite import ir
 from numba.core import types
 from numba.extending import intrinsic, overload
 
-__all__ = ["sweep_vjp"]
+__all__ = ["sweep", "sweep_jvp", "sweep_vjp"]
 
 
 @intrinsic
@@ -38,9 +39,12 @@ def _float32_from_bits(typingctx, bits):
 
 
 @numba.njit(fastmath=True, inline="always")
-def _exp_neg(x):
-    r""":math:`e^{-x}` in float32 for :math:`x \ge 0` (underflows to 2**-126 below e^-87.3):
-    range reduction by ln 2 and the Cephes degree-6 polynomial."""
+def _expm1_parts(x):
+    r""":math:`e^{-x} = (1 + m)\,2^k` in float32 for :math:`x \ge 0`: ``(m, k, 2**k)``, with
+    ``m`` :math:`= e^r - 1` to a few ulp (:math:`|r| \le \ln 2 / 2`, no cancellation: for
+    :math:`x < 0.35`, :math:`k = 0` and ``-m`` is the absorptance :math:`1 - e^{-x}`).
+    Range reduction by ln 2 and the Cephes degree-6 polynomial of ``expf``; underflows to
+    2**-126 below e^-87.3."""
     v = max(-x, np.float32(-87.3))
     k = np.floor(v * np.float32(1.44269504) + np.float32(0.5))  # float32 throughout
     r = v - k * np.float32(0.693359375) - k * np.float32(-2.12194440e-4)
@@ -50,8 +54,14 @@ def _exp_neg(x):
     p = p * r + np.float32(4.1665795894e-2)
     p = p * r + np.float32(1.6666665459e-1)
     p = p * r + np.float32(5.0000001201e-1)
-    p = p * r * r + r + np.float32(1.0)
-    return p * _float32_from_bits((np.int32(k) + np.int32(127)) << np.int32(23))
+    return p * r * r + r, k, _float32_from_bits((np.int32(k) + np.int32(127)) << np.int32(23))
+
+
+@numba.njit(fastmath=True, inline="always")
+def _exp_neg(x):
+    r""":math:`e^{-x}` in float32 for :math:`x \ge 0` (:func:`_expm1_parts`)."""
+    m, _, scale = _expm1_parts(x)
+    return (m + np.float32(1.0)) * scale
 
 
 def _transmission(tau):
@@ -66,11 +76,10 @@ def _transmission_for(tau):
         return lambda tau: (math.exp(-tau), -math.expm1(-tau))
 
     def float32(tau):
-        t = _exp_neg(tau)
-        series = np.float32(1.0) - tau * np.float32(1 / 6)
-        for n in (5, 4, 3, 2):
-            series = np.float32(1.0) - tau * np.float32(1 / n) * series
-        return t, tau * series if tau < np.float32(0.1) else np.float32(1.0) - t
+        # the absorptance -m where k = 0 (a select, which no reassociation undoes), else 1 - t
+        m, k, scale = _expm1_parts(tau)
+        t = (m + np.float32(1.0)) * scale
+        return t, -m if k == np.float32(0.0) else np.float32(1.0) - t
     return float32
 
 
@@ -86,33 +95,119 @@ def _slope(c, row, j, u):
     return (3 * c[row, j] * u + 2 * c[row + 1, j]) * u + c[row + 2, j]
 
 
+@numba.njit(fastmath=True, inline="always")
+def _optical_depth(c, u, amount, n_gas, derivatives, tau, tau_u, rows):
+    r"""One segment's optical depth :math:`\tau = \sum_s a_s \tilde\sigma_s(u)` (plus the
+    soot's :math:`a\,C\eta`) into ``tau``; with ``derivatives``, also each row whose product
+    with its amount enters :math:`\tau` into ``rows`` and :math:`\partial\tau/\partial u`
+    into ``tau_u`` (both untouched otherwise)."""
+    tau[:] = 0
+    if derivatives:
+        tau_u[:] = 0
+    for s in range(n_gas):
+        a = amount[s]
+        if derivatives:
+            row = rows[s]
+            for j in range(tau.size):
+                row[j] = _cubic(c, 4 * s, j, u)
+                tau[j] += a * row[j]
+                tau_u[j] += a * _slope(c, 4 * s, j, u)
+        else:
+            for j in range(tau.size):
+                tau[j] += a * _cubic(c, 4 * s, j, u)
+    if amount.size > n_gas:  # soot: a row of the table, constant in u
+        a = amount[n_gas]
+        soot = c[4 * n_gas]
+        for j in range(tau.size):
+            tau[j] += a * soot[j]
+        if derivatives:
+            rows[n_gas, :] = soot
+
+
 @numba.njit(fastmath=True, parallel=True, cache=True)
-def _sweep_vjp(coef, index, amount, offset, n_segments, n_gas, radiance, cotangent, order):
-    n_rays, n_seg, n_tau = amount.shape
-    n_eta = coef.shape[2]
-    soot, planck_row = n_tau > n_gas, n_tau + 3 * n_gas
-    d_weights = np.zeros((n_rays, n_seg, n_tau + 1), coef.dtype)
-    transmittance = np.empty((n_rays, n_eta), coef.dtype)
+def _sweep(coef, index, amount, offset, n_segments, n_gas, background, order):
+    n_rays, n_tau, n_eta = amount.shape[0], amount.shape[2], coef.shape[2]
+    planck_row = n_tau + 3 * n_gas
+    radiance = np.empty((n_rays, n_eta), coef.dtype)
     for q in numba.prange(n_rays):
         i = order[q]
         partial_sum = np.zeros(n_eta, coef.dtype)
         through = np.ones(n_eta, coef.dtype)
         tau = np.empty(n_eta, coef.dtype)
-        tau_offset = np.empty(n_eta, coef.dtype)
-        g_tau = np.empty(n_eta, coef.dtype)
+        unused = np.empty((0, n_eta), coef.dtype)
         for k in range(n_segments[i]):
             c, u = coef[index[i, k]], offset[i, k]
-            tau[:] = 0
-            tau_offset[:] = 0
-            for s in range(n_gas):
-                a = amount[i, k, s]
+            _optical_depth(c, u, amount[i, k], n_gas, False, tau, tau, unused)
+            for j in range(n_eta):
+                t, absorptance = _transmission(tau[j])
+                partial_sum[j] += _cubic(c, planck_row, j, u) * through[j] * absorptance
+                through[j] *= t
+        for j in range(n_eta):
+            radiance[i, j] = partial_sum[j] + through[j] * background[i, j]
+    return radiance
+
+
+@numba.njit(fastmath=True, parallel=True, cache=True)
+def _sweep_jvp(coef, index, amount, offset, n_segments, n_gas, background, d_amount,
+               d_offset, d_background, order):
+    n_rays, n_tau, n_eta = amount.shape[0], amount.shape[2], coef.shape[2]
+    planck_row = n_tau + 3 * n_gas
+    radiance = np.empty((n_rays, n_eta), coef.dtype)
+    d_radiance = np.empty((n_rays, n_eta), coef.dtype)
+    for q in numba.prange(n_rays):
+        i = order[q]
+        partial_sum = np.zeros(n_eta, coef.dtype)
+        d_sum = np.zeros(n_eta, coef.dtype)
+        through = np.ones(n_eta, coef.dtype)
+        depth = np.zeros(n_eta, coef.dtype)  # tangent of the optical depth in front
+        tau = np.empty(n_eta, coef.dtype)
+        tau_u = np.empty(n_eta, coef.dtype)
+        d_tau = np.empty(n_eta, coef.dtype)
+        rows = np.empty((n_tau, n_eta), coef.dtype)
+        for k in range(n_segments[i]):
+            c, u, du = coef[index[i, k]], offset[i, k], d_offset[i, k]
+            _optical_depth(c, u, amount[i, k], n_gas, True, tau, tau_u, rows)
+            for j in range(n_eta):
+                d_tau[j] = du * tau_u[j]
+            for s in range(n_tau):
+                da, row = d_amount[i, k, s], rows[s]
                 for j in range(n_eta):
-                    tau[j] += a * _cubic(c, 4 * s, j, u)
-                    tau_offset[j] += a * _slope(c, 4 * s, j, u)
-            if soot:
-                a = amount[i, k, n_gas]
-                for j in range(n_eta):
-                    tau[j] += a * c[4 * n_gas, j]
+                    d_tau[j] += da * row[j]
+            for j in range(n_eta):
+                emission = _cubic(c, planck_row, j, u)
+                t, absorptance = _transmission(tau[j])
+                seen = through[j] * absorptance
+                d_sum[j] += (seen * (du * _slope(c, planck_row, j, u) - emission * depth[j])
+                             + through[j] * t * emission * d_tau[j])
+                partial_sum[j] += emission * seen
+                depth[j] += d_tau[j]
+                through[j] *= t
+        for j in range(n_eta):
+            radiance[i, j] = partial_sum[j] + through[j] * background[i, j]
+            d_radiance[i, j] = d_sum[j] + through[j] * (d_background[i, j]
+                                                        - depth[j] * background[i, j])
+    return radiance, d_radiance
+
+
+@numba.njit(fastmath=True, parallel=True, cache=True)
+def _sweep_vjp(coef, index, amount, offset, n_segments, n_gas, radiance, cotangent,
+               with_transmittance, order):
+    n_rays, n_seg, n_tau = amount.shape
+    n_eta = coef.shape[2]
+    planck_row = n_tau + 3 * n_gas
+    d_weights = np.zeros((n_rays, n_seg, n_tau + 1), coef.dtype)
+    transmittance = np.empty((n_rays if with_transmittance else 0, n_eta), coef.dtype)
+    for q in numba.prange(n_rays):
+        i = order[q]
+        partial_sum = np.zeros(n_eta, coef.dtype)
+        through = np.ones(n_eta, coef.dtype)
+        tau = np.empty(n_eta, coef.dtype)
+        tau_u = np.empty(n_eta, coef.dtype)
+        g_tau = np.empty(n_eta, coef.dtype)
+        rows = np.empty((n_tau, n_eta), coef.dtype)
+        for k in range(n_segments[i]):
+            c, u = coef[index[i, k]], offset[i, k]
+            _optical_depth(c, u, amount[i, k], n_gas, True, tau, tau_u, rows)
             d_offset = coef.dtype.type(0)
             for j in range(n_eta):
                 emission = _cubic(c, planck_row, j, u)
@@ -122,24 +217,98 @@ def _sweep_vjp(coef, index, amount, offset, n_segments, n_gas, radiance, cotange
                 through[j] *= t
                 g = cotangent[i, j] * (through[j] * emission - (radiance[i, j] - partial_sum[j]))
                 g_tau[j] = g
-                d_offset += g * tau_offset[j] + (cotangent[i, j] * absorbed
-                                                 * _slope(c, planck_row, j, u))
+                d_offset += g * tau_u[j] + (cotangent[i, j] * absorbed
+                                            * _slope(c, planck_row, j, u))
             d_weights[i, k, n_tau] = d_offset
-            for s in range(n_gas):
-                total = coef.dtype.type(0)
+            for s in range(n_tau):
+                total, row = coef.dtype.type(0), rows[s]
                 for j in range(n_eta):
-                    total += g_tau[j] * _cubic(c, 4 * s, j, u)
+                    total += g_tau[j] * row[j]
                 d_weights[i, k, s] = total
-            if soot:
-                total = coef.dtype.type(0)
-                for j in range(n_eta):
-                    total += g_tau[j] * c[4 * n_gas, j]
-                d_weights[i, k, n_gas] = total
-        transmittance[i] = through
+        if with_transmittance:
+            transmittance[i] = through
     return d_weights, transmittance
 
 
-def sweep_vjp(coef, index, amount, offset, n_segments, radiance, cotangent, *, n_gas):
+def _order(n_segments):
+    """Rays longest first, so that the cores' last rays are short ones."""
+    return np.argsort(-n_segments, kind="stable")
+
+
+def _no_background(coef, n_rays):
+    """A zero background, (n_rays, n_eta) without the memory (a broadcast view)."""
+    return np.broadcast_to(np.zeros(1, coef.dtype), (n_rays, coef.shape[2]))
+
+
+def sweep(coef, index, amount, offset, n_segments, background=None, *, n_gas):
+    r"""Each ray's radiance: the forward sweep, camera side first.
+
+    :math:`I = \sum_k B_k (1 - t_k) P_k + \tau_\mathrm{ray} I_\mathrm{bg}` (module notes of
+    :mod:`operators.rte_kernel`), accumulated with :math:`P_k` segment by segment.
+
+    Parameters
+    ----------
+    coef, index, amount, offset, n_segments, n_gas
+        As in :func:`sweep_vjp`.
+    background : ndarray, shape (n_rays, n_eta), optional
+        Radiance behind each ray in W/(m²·sr·cm⁻¹) (default None: none).
+
+    Returns
+    -------
+    ndarray, shape (n_rays, n_eta)
+        Spectral radiance in W/(m²·sr·cm⁻¹).
+    """
+    coef, index, amount, offset, n_segments = _host_inputs(coef, index, amount, offset,
+                                                           n_segments)
+    if background is None:
+        background = _no_background(coef, amount.shape[0])
+    return _sweep(coef, index, amount, offset, n_segments, int(n_gas),
+                  np.asarray(background, coef.dtype), _order(n_segments))
+
+
+def sweep_jvp(coef, index, amount, offset, n_segments, background, d_amount, d_offset,
+              d_background, *, n_gas):
+    r"""Each ray's radiance and its tangent: the forward-mode sweep, camera side first.
+
+    With :math:`D_k = \sum_{m<k} \dot\tau_m` the tangent of the optical depth in front of
+    segment :math:`k` (:math:`\dot P_k = -P_k D_k`),
+
+    .. math::
+
+        \dot I = \sum_k P_k \left[(1 - t_k)(\dot B_k - B_k D_k) + t_k B_k \dot\tau_k
+        \right] + \tau_\mathrm{ray} (\dot I_\mathrm{bg} - D_n I_\mathrm{bg}),
+
+    :math:`\dot\tau_k = \sum_s \dot a_s \tilde\sigma_s + \dot u\,\partial_u\tau`,
+    :math:`\dot B_k = \dot u\,\partial_u \tilde B`: one pass per segment besides the
+    optical depth's, no stored spectra.
+
+    Parameters
+    ----------
+    coef, index, amount, offset, n_segments, n_gas
+        As in :func:`sweep_vjp`.
+    background, d_background : ndarray, shape (n_rays, n_eta), or None
+        Radiance behind each ray in W/(m²·sr·cm⁻¹) and its tangent (None: zero).
+    d_amount, d_offset : ndarray
+        Tangents of ``amount`` and ``offset``, shaped as they are.
+
+    Returns
+    -------
+    radiance, d_radiance : ndarray, shape (n_rays, n_eta)
+        Spectral radiance in W/(m²·sr·cm⁻¹) and its tangent.
+    """
+    coef, index, amount, offset, n_segments = _host_inputs(coef, index, amount, offset,
+                                                           n_segments)
+    n_rays = amount.shape[0]
+    background, d_background = (_no_background(coef, n_rays) if b is None
+                                else np.asarray(b, coef.dtype)
+                                for b in (background, d_background))
+    return _sweep_jvp(coef, index, amount, offset, n_segments, int(n_gas), background,
+                      np.asarray(d_amount, coef.dtype), np.asarray(d_offset, coef.dtype),
+                      d_background, _order(n_segments))
+
+
+def sweep_vjp(coef, index, amount, offset, n_segments, radiance, cotangent, *, n_gas,
+              with_transmittance=True):
     r"""Cotangents of the segment weights of every ray, and each ray's transmittance.
 
     The reverse sweep of :func:`operators.rte_kernel._sweep_vjp` for all rays at once, with
@@ -163,20 +332,27 @@ def sweep_vjp(coef, index, amount, offset, n_segments, radiance, cotangent, *, n
         The kernel's radiance in W/(m²·sr·cm⁻¹) (background included) and its cotangent.
     n_gas : int
         Absorbing gases (``n_tau - n_gas`` is 1 with soot, else 0).
+    with_transmittance : bool, optional
+        Whether to return each ray's transmittance (default True; without a background its
+        cotangent is not needed).
 
     Returns
     -------
     d_weights : ndarray, shape (n_rays, n_seg, n_tau + 1)
         Cotangents of the amounts, then of the offset.
-    transmittance : ndarray, shape (n_rays, n_eta)
+    transmittance : ndarray, shape (n_rays, n_eta), or (0, n_eta)
         Each ray's transmittance :math:`\tau_\mathrm{ray}` (the background's cotangent is
-        ``cotangent * transmittance``).
+        ``cotangent * transmittance``); no rows without ``with_transmittance``.
     """
-    dtype = np.asarray(coef).dtype
-    n_segments = np.asarray(n_segments, np.int64)
-    # longest rays first, so that the cores' last rays are short ones
-    order = np.argsort(-n_segments, kind="stable")
-    return _sweep_vjp(np.ascontiguousarray(coef), np.asarray(index, np.int64),
-                      np.asarray(amount, dtype), np.asarray(offset, dtype), n_segments,
-                      int(n_gas), np.asarray(radiance, dtype), np.asarray(cotangent, dtype),
-                      order)
+    coef, index, amount, offset, n_segments = _host_inputs(coef, index, amount, offset,
+                                                           n_segments)
+    return _sweep_vjp(coef, index, amount, offset, n_segments, int(n_gas),
+                      np.asarray(radiance, coef.dtype), np.asarray(cotangent, coef.dtype),
+                      bool(with_transmittance), _order(n_segments))
+
+
+def _host_inputs(coef, index, amount, offset, n_segments):
+    """The sweeps' common inputs as the compiled kernels take them."""
+    coef = np.ascontiguousarray(coef)
+    return (coef, np.asarray(index, np.int64), np.asarray(amount, coef.dtype),
+            np.asarray(offset, coef.dtype), np.asarray(n_segments, np.int64))
