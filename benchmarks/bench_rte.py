@@ -28,7 +28,7 @@ the repeats:
 
 "elements" is the number of real segments times the number of wavenumbers; the kernel also
 sweeps the padding of each batch (rays sorted by segment count), reported as "swept".
-Peak memory is the process's peak resident set size (``resource.getrusage``): at the end, once
+Peak memory is the process's peak resident set size (``bench_memory.peak_mib``): at the end, once
 the scene was built, and after exp-only, forward and forward+VJP, before anything else is
 built; and XLA's temporary buffers of the compiled forward+VJP. Last, ``bench_memory.py`` runs
 in a process of its own on the same grid, cameras and rays and prints what a voxel
@@ -37,7 +37,6 @@ reconstruction's process holds: scene, data and gradient epochs only, the alloca
 """
 
 import argparse
-import resource
 import subprocess
 import sys
 from functools import partial
@@ -46,6 +45,7 @@ from pathlib import Path
 import jax
 import jax.numpy as jnp
 import numpy as np
+from bench_memory import peak_mib
 from timing import CLOCKS, best_time
 
 from invflame.phantoms.registry import make_phantom
@@ -58,11 +58,6 @@ from operators.rte_batches import (
     spectra_batches,
 )
 from operators.rte_kernel import emission_radiance, emission_radiance_jvp
-
-
-def resident_mib() -> float:
-    """Peak resident set size of this process so far, in MiB."""
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**10  # KiB -> MiB
 
 
 def segment_loop(body, n_segments, init):
@@ -198,7 +193,7 @@ def main() -> None:
     scene = Scene.paper(args.cells, args.pixels, rays_per_pixel=args.rays_per_pixel,
                         memory_budget=args.memory_budget, batch_rays=args.batch_rays)
     fields = jnp.asarray(make_phantom(args.phantom, grid=scene.grid).values, jnp.float32)
-    built = resident_mib()
+    built = peak_mib()
     data = scene.forward(fields) * 1.01
 
     def loss(f):
@@ -215,7 +210,7 @@ def main() -> None:
         "forward+VJP": lambda: gradient(fields),
     }
     times = {name: best_time(fn, args.repeats, args.clock) for name, fn in epoch.items()}
-    epoch_peak = resident_mib()  # what a voxel reconstruction needs, before the other rows
+    epoch_peak = peak_mib()  # what a voxel reconstruction needs, before the other rows
     jacobian = scene.operator.linearize(np.asarray(fields))
     direction = np.random.default_rng(0).standard_normal(fields.shape).astype(np.float32)
     direction[0] *= 30.0  # kelvins for T, percent-level for mole fractions
@@ -227,7 +222,7 @@ def main() -> None:
         times.update({f"  {name}": t
                       for name, t in stages(scene, fields, args.repeats, args.clock).items()})
     temp = gradient.lower(fields).compile().memory_analysis().temp_size_in_bytes
-    peak = resident_mib()
+    peak = peak_mib()
 
     print(f"backend {jax.default_backend()}, {jax.device_count()} device(s), {args.clock} "
           f"time, best of {args.repeats}")
