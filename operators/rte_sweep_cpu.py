@@ -10,6 +10,15 @@ is swept at a time, camera side first, its spectra (a few KiB each) stay in the 
 and each table row is read once per segment. Rays run in parallel over the CPU's cores
 (``numba.prange``), longest first.
 
+Each segment is one pass over wavenumber: every gas's row of the optical depth, its offset
+derivative, the Planck spline, the transmission and the running sums, held in registers from
+one to the next. For that the compiler needs the gases written out one by one (a loop over a
+count known only at run time, inside the loop over wavenumber, is not vectorized: 8 × slower
+in a trial), so the sweeps' source is a template, :data:`_KERNELS`, whose per-gas lines
+:func:`_kernels` writes for the tables' number of gases into a file of its own
+(:func:`_source_file`), which Numba compiles on first use (2–6 s per sweep in float32 on two
+cores, first-call times) and caches on disk.
+
 float32 uses a vectorizable exponential (:func:`_expm1_parts`, the Cephes ``expf``
 polynomial) that gives the absorptance :math:`1 - e^{-\tau}` without cancellation from the same
 polynomial; float64 uses ``math.exp`` and ``expm1``. The XLA sweeps of
@@ -19,7 +28,15 @@ against (``tests/operators/test_rte_sweep_cpu.py``); ``benchmarks/bench_rte.py``
 
 from __future__ import annotations
 
+import functools
+import hashlib
+import importlib.util
 import math
+import os
+import sys
+import tempfile
+from pathlib import Path
+from types import ModuleType
 
 import numba
 import numpy as np
@@ -91,56 +108,34 @@ def _cubic(c, row, j, u):
 
 @numba.njit(fastmath=True, inline="always")
 def _slope(c, row, j, u):
-    """Offset derivative of :func:`_cubic`."""
-    return (3 * c[row, j] * u + 2 * c[row + 1, j]) * u + c[row + 2, j]
+    """Offset derivative of :func:`_cubic` (in ``c``'s precision: an integer factor would
+    promote float32 to float64)."""
+    three, two = c.dtype.type(3), c.dtype.type(2)
+    return (three * c[row, j] * u + two * c[row + 1, j]) * u + c[row + 2, j]
 
 
-@numba.njit(fastmath=True, inline="always")
-def _optical_depth(c, u, amount, n_gas, derivatives, tau, tau_u, rows):
-    r"""One segment's optical depth :math:`\tau = \sum_s a_s \tilde\sigma_s(u)` (plus the
-    soot's :math:`a\,C\eta`) into ``tau``; with ``derivatives``, also each row whose product
-    with its amount enters :math:`\tau` into ``rows`` and :math:`\partial\tau/\partial u`
-    into ``tau_u`` (both untouched otherwise)."""
-    tau[:] = 0
-    if derivatives:
-        tau_u[:] = 0
-    for s in range(n_gas):
-        a = amount[s]
-        if derivatives:
-            row = rows[s]
-            for j in range(tau.size):
-                row[j] = _cubic(c, 4 * s, j, u)
-                tau[j] += a * row[j]
-                tau_u[j] += a * _slope(c, 4 * s, j, u)
-        else:
-            for j in range(tau.size):
-                tau[j] += a * _cubic(c, 4 * s, j, u)
-    if amount.size > n_gas:  # soot: a row of the table, constant in u
-        a = amount[n_gas]
-        soot = c[4 * n_gas]
-        for j in range(tau.size):
-            tau[j] += a * soot[j]
-        if derivatives:
-            rows[n_gas, :] = soot
+_KERNELS = """import numba
+import numpy as np
+
+from operators.rte_sweep_cpu import _cubic, _slope, _transmission
 
 
 @numba.njit(fastmath=True, parallel=True, cache=True)
-def _sweep(coef, index, amount, offset, n_segments, n_gas, background, order):
-    n_rays, n_tau, n_eta = amount.shape[0], amount.shape[2], coef.shape[2]
-    planck_row = n_tau + 3 * n_gas
+def forward(coef, index, amount, offset, n_segments, background, order):
+    n_rays, n_eta = amount.shape[0], coef.shape[2]
+    zero = coef.dtype.type(0)
     radiance = np.empty((n_rays, n_eta), coef.dtype)
     for q in numba.prange(n_rays):
         i = order[q]
         partial_sum = np.zeros(n_eta, coef.dtype)
         through = np.ones(n_eta, coef.dtype)
-        tau = np.empty(n_eta, coef.dtype)
-        unused = np.empty((0, n_eta), coef.dtype)
         for k in range(n_segments[i]):
             c, u = coef[index[i, k]], offset[i, k]
-            _optical_depth(c, u, amount[i, k], n_gas, False, tau, tau, unused)
+            {amounts}
             for j in range(n_eta):
-                t, absorptance = _transmission(tau[j])
-                partial_sum[j] += _cubic(c, planck_row, j, u) * through[j] * absorptance
+                {rows}
+                t, absorptance = _transmission({tau})
+                partial_sum[j] += _cubic(c, {planck_row}, j, u) * through[j] * absorptance
                 through[j] *= t
         for j in range(n_eta):
             radiance[i, j] = partial_sum[j] + through[j] * background[i, j]
@@ -148,10 +143,10 @@ def _sweep(coef, index, amount, offset, n_segments, n_gas, background, order):
 
 
 @numba.njit(fastmath=True, parallel=True, cache=True)
-def _sweep_jvp(coef, index, amount, offset, n_segments, n_gas, background, d_amount,
-               d_offset, d_background, order):
-    n_rays, n_tau, n_eta = amount.shape[0], amount.shape[2], coef.shape[2]
-    planck_row = n_tau + 3 * n_gas
+def forward_mode(coef, index, amount, offset, n_segments, background, d_amount, d_offset,
+                 d_background, order):
+    n_rays, n_eta = amount.shape[0], coef.shape[2]
+    zero = coef.dtype.type(0)
     radiance = np.empty((n_rays, n_eta), coef.dtype)
     d_radiance = np.empty((n_rays, n_eta), coef.dtype)
     for q in numba.prange(n_rays):
@@ -160,27 +155,21 @@ def _sweep_jvp(coef, index, amount, offset, n_segments, n_gas, background, d_amo
         d_sum = np.zeros(n_eta, coef.dtype)
         through = np.ones(n_eta, coef.dtype)
         depth = np.zeros(n_eta, coef.dtype)  # tangent of the optical depth in front
-        tau = np.empty(n_eta, coef.dtype)
-        tau_u = np.empty(n_eta, coef.dtype)
-        d_tau = np.empty(n_eta, coef.dtype)
-        rows = np.empty((n_tau, n_eta), coef.dtype)
         for k in range(n_segments[i]):
             c, u, du = coef[index[i, k]], offset[i, k], d_offset[i, k]
-            _optical_depth(c, u, amount[i, k], n_gas, True, tau, tau_u, rows)
+            {amounts}
+            {d_amounts}
             for j in range(n_eta):
-                d_tau[j] = du * tau_u[j]
-            for s in range(n_tau):
-                da, row = d_amount[i, k, s], rows[s]
-                for j in range(n_eta):
-                    d_tau[j] += da * row[j]
-            for j in range(n_eta):
-                emission = _cubic(c, planck_row, j, u)
-                t, absorptance = _transmission(tau[j])
+                {rows}
+                tau_u = {tau_u}
+                d_tau = {d_tau}
+                emission = _cubic(c, {planck_row}, j, u)
+                t, absorptance = _transmission({tau})
                 seen = through[j] * absorptance
-                d_sum[j] += (seen * (du * _slope(c, planck_row, j, u) - emission * depth[j])
-                             + through[j] * t * emission * d_tau[j])
+                d_sum[j] += (seen * (du * _slope(c, {planck_row}, j, u) - emission * depth[j])
+                             + through[j] * t * emission * d_tau)
                 partial_sum[j] += emission * seen
-                depth[j] += d_tau[j]
+                depth[j] += d_tau
                 through[j] *= t
         for j in range(n_eta):
             radiance[i, j] = partial_sum[j] + through[j] * background[i, j]
@@ -190,44 +179,111 @@ def _sweep_jvp(coef, index, amount, offset, n_segments, n_gas, background, d_amo
 
 
 @numba.njit(fastmath=True, parallel=True, cache=True)
-def _sweep_vjp(coef, index, amount, offset, n_segments, n_gas, radiance, cotangent,
-               with_transmittance, order):
-    n_rays, n_seg, n_tau = amount.shape
-    n_eta = coef.shape[2]
-    planck_row = n_tau + 3 * n_gas
-    d_weights = np.zeros((n_rays, n_seg, n_tau + 1), coef.dtype)
+def reverse(coef, index, amount, offset, n_segments, radiance, cotangent, with_transmittance,
+            order):
+    n_rays, n_seg, n_eta = amount.shape[0], amount.shape[1], coef.shape[2]
+    zero = coef.dtype.type(0)
+    d_weights = np.zeros((n_rays, n_seg, {n_tau} + 1), coef.dtype)
     transmittance = np.empty((n_rays if with_transmittance else 0, n_eta), coef.dtype)
     for q in numba.prange(n_rays):
         i = order[q]
         partial_sum = np.zeros(n_eta, coef.dtype)
         through = np.ones(n_eta, coef.dtype)
-        tau = np.empty(n_eta, coef.dtype)
-        tau_u = np.empty(n_eta, coef.dtype)
-        g_tau = np.empty(n_eta, coef.dtype)
-        rows = np.empty((n_tau, n_eta), coef.dtype)
         for k in range(n_segments[i]):
             c, u = coef[index[i, k]], offset[i, k]
-            _optical_depth(c, u, amount[i, k], n_gas, True, tau, tau_u, rows)
-            d_offset = coef.dtype.type(0)
+            {amounts}
+            {sums_zero}
+            d_offset = zero
             for j in range(n_eta):
-                emission = _cubic(c, planck_row, j, u)
-                t, absorptance = _transmission(tau[j])
+                {rows}
+                tau_u = {tau_u}
+                emission = _cubic(c, {planck_row}, j, u)
+                t, absorptance = _transmission({tau})
                 absorbed = through[j] * absorptance
                 partial_sum[j] += emission * absorbed
                 through[j] *= t
                 g = cotangent[i, j] * (through[j] * emission - (radiance[i, j] - partial_sum[j]))
-                g_tau[j] = g
-                d_offset += g * tau_u[j] + (cotangent[i, j] * absorbed
-                                            * _slope(c, planck_row, j, u))
-            d_weights[i, k, n_tau] = d_offset
-            for s in range(n_tau):
-                total, row = coef.dtype.type(0), rows[s]
-                for j in range(n_eta):
-                    total += g_tau[j] * row[j]
-                d_weights[i, k, s] = total
+                d_offset += g * tau_u + cotangent[i, j] * absorbed * _slope(c, {planck_row}, j, u)
+                {sums_add}
+            {sums_store}
+            d_weights[i, k, {n_tau}] = d_offset
         if with_transmittance:
             transmittance[i] = through
     return d_weights, transmittance
+"""
+"""The three sweeps as Python source; each ``{…}`` stands for a line or an expression written
+out gas by gas (:func:`_gas_code`), which :func:`_kernels` fills in for the tables' gases."""
+
+
+def _gas_code(n_gas: int, n_tau: int) -> dict[str, str]:
+    """The lines of :data:`_KERNELS` that name each row of the optical depth: the gases'
+    cubic rows ``4 s … 4 s + 3`` of the table, then the soot's row (constant in ``u``)."""
+    rows = [f"_cubic(c, {4 * s}, j, u)" for s in range(n_gas)] + [f"c[{4 * n_gas}, j]"] * (
+        n_tau - n_gas)
+    r, a, da, g = ([f"{name}{s}" for s in range(n_tau)] for name in ("r", "a", "da", "g"))
+
+    def assign(names, values):
+        return f"{', '.join(names)} = {', '.join(values)}" if names else "pass"
+
+    def total(terms):
+        return " + ".join(terms) if terms else "zero"
+
+    return {
+        "planck_row": str(n_tau + 3 * n_gas),
+        "amounts": assign(a, [f"amount[i, k, {s}]" for s in range(n_tau)]),
+        "d_amounts": assign(da, [f"d_amount[i, k, {s}]" for s in range(n_tau)]),
+        "rows": assign(r, rows),
+        "tau": total([f"{a[s]} * {r[s]}" for s in range(n_tau)]),
+        "tau_u": total([f"{a[s]} * _slope(c, {4 * s}, j, u)" for s in range(n_gas)]),
+        "d_tau": total(["du * tau_u"] + [f"{da[s]} * {r[s]}" for s in range(n_tau)]),
+        "sums_zero": assign(g, ["zero"] * n_tau),
+        "sums_add": assign(g, [f"{g[s]} + g * {r[s]}" for s in range(n_tau)]),
+        "sums_store": assign([f"d_weights[i, k, {s}]" for s in range(n_tau)], g),
+    }
+
+
+@functools.cache
+def _kernels(n_gas: int, n_tau: int) -> ModuleType:
+    """The sweeps of :data:`_KERNELS` for ``n_gas`` gases and ``n_tau`` rows of the optical
+    depth (``n_tau - n_gas`` soot rows): a module ``forward``, ``forward_mode``, ``reverse``,
+    compiled by Numba on their first call and cached on disk (:func:`_source_file`)."""
+    if not 0 <= n_gas <= n_tau <= n_gas + 1:
+        raise ValueError(f"the sweeps take n_gas >= 0 gases and at most one soot row; got "
+                         f"n_gas = {n_gas}, n_tau = {n_tau} rows of the optical depth")
+    path = _source_file(_KERNELS.format(n_tau=n_tau, **_gas_code(n_gas, n_tau)),
+                        f"sweeps_{n_gas}_gases_{n_tau - n_gas}_soot")
+    spec = importlib.util.spec_from_file_location(f"{__name__}_{path.stem}", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # where Numba's cache finds the sweeps' globals
+    spec.loader.exec_module(module)
+    return module
+
+
+def _source_file(source: str, stem: str) -> Path:
+    """``source`` as a Python file of its own, where Numba's disk cache can find it.
+
+    The name carries a hash of the source and of this module, so a file once written never
+    changes (Numba keys its cache on the file's time stamp; a change to the helpers here makes
+    new files). The directory is ``$NUMBA_CACHE_DIR/invflame`` if set, else
+    ``$XDG_CACHE_HOME/invflame`` (``~/.cache/invflame``), else, if that cannot be written, one
+    in the temporary directory.
+    """
+    digest = hashlib.sha256(source.encode() + Path(__file__).read_bytes()).hexdigest()[:16]
+    cache = os.environ.get("NUMBA_CACHE_DIR") or os.environ.get("XDG_CACHE_HOME") or (
+        Path.home() / ".cache")
+    for directory in (Path(cache) / "invflame", Path(tempfile.gettempdir()) / "invflame"):
+        path = directory / f"{stem}_{digest}.py"
+        try:
+            if not path.exists():  # written whole, then renamed: no process reads half a file
+                directory.mkdir(parents=True, exist_ok=True)
+                partial = directory / f".{path.name}.{os.getpid()}"
+                partial.write_text(source)
+                os.replace(partial, path)
+            return path
+        except OSError as error:
+            failure = error
+    raise OSError(f"cannot write the compiled sweeps' source to {cache}/invflame or the "
+                  f"temporary directory; set NUMBA_CACHE_DIR to a writable directory") from failure
 
 
 def _order(n_segments):
@@ -262,8 +318,9 @@ def sweep(coef, index, amount, offset, n_segments, background=None, *, n_gas):
                                                            n_segments)
     if background is None:
         background = _no_background(coef, amount.shape[0])
-    return _sweep(coef, index, amount, offset, n_segments, int(n_gas),
-                  np.asarray(background, coef.dtype), _order(n_segments))
+    return _kernels(int(n_gas), amount.shape[2]).forward(
+        coef, index, amount, offset, n_segments, np.asarray(background, coef.dtype),
+        _order(n_segments))
 
 
 def sweep_jvp(coef, index, amount, offset, n_segments, background, d_amount, d_offset,
@@ -302,9 +359,9 @@ def sweep_jvp(coef, index, amount, offset, n_segments, background, d_amount, d_o
     background, d_background = (_no_background(coef, n_rays) if b is None
                                 else np.asarray(b, coef.dtype)
                                 for b in (background, d_background))
-    return _sweep_jvp(coef, index, amount, offset, n_segments, int(n_gas), background,
-                      np.asarray(d_amount, coef.dtype), np.asarray(d_offset, coef.dtype),
-                      d_background, _order(n_segments))
+    return _kernels(int(n_gas), amount.shape[2]).forward_mode(
+        coef, index, amount, offset, n_segments, background, np.asarray(d_amount, coef.dtype),
+        np.asarray(d_offset, coef.dtype), d_background, _order(n_segments))
 
 
 def sweep_vjp(coef, index, amount, offset, n_segments, radiance, cotangent, *, n_gas,
@@ -346,9 +403,9 @@ def sweep_vjp(coef, index, amount, offset, n_segments, radiance, cotangent, *, n
     """
     coef, index, amount, offset, n_segments = _host_inputs(coef, index, amount, offset,
                                                            n_segments)
-    return _sweep_vjp(coef, index, amount, offset, n_segments, int(n_gas),
-                      np.asarray(radiance, coef.dtype), np.asarray(cotangent, coef.dtype),
-                      bool(with_transmittance), _order(n_segments))
+    return _kernels(int(n_gas), amount.shape[2]).reverse(
+        coef, index, amount, offset, n_segments, np.asarray(radiance, coef.dtype),
+        np.asarray(cotangent, coef.dtype), bool(with_transmittance), _order(n_segments))
 
 
 def _host_inputs(coef, index, amount, offset, n_segments):

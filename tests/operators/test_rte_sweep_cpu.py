@@ -1,6 +1,9 @@
 """The Numba sweeps for CPUs (forward, forward-mode, reverse) against XLA's, and their float32
 exponential."""
 
+import tempfile
+from pathlib import Path
+
 import jax
 import jax.numpy as jnp
 import numba
@@ -15,12 +18,12 @@ from operators.rte_kernel import (
     emission_radiance,
     emission_radiance_jvp,
 )
-from operators.rte_sweep_cpu import _exp_neg, _transmission
+from operators.rte_sweep_cpu import _exp_neg, _kernels, _source_file, _transmission
 from operators.rte_tables import RTETables, rayleigh_soot_constant
 from operators.tabulated import PiecewiseCubic
 
 ETA, NODES, SIGMA = synthetic_sigma(n_eta=40)
-COEF = PiecewiseCubic(NODES, SIGMA).coef
+COEF = PiecewiseCubic(NODES, SIGMA).coef  # two species absorb
 
 
 def gradients(tables, fields, lengths, background, sweeps):
@@ -40,14 +43,18 @@ def assert_same_gradients(xla, ours, rtol):
         assert np.max(np.abs(a - b)) <= rtol * np.max(np.abs(a))
 
 
-def scene(dtype, soot):
-    """Seven random rays (two with padding), tables with or without soot, a background."""
+def scene(dtype, soot, zero_species=(2,)):
+    """Seven random rays (two with padding), tables with or without soot (of the three
+    species, those in ``zero_species`` do not absorb), a background."""
     fields, lengths = random_rays(n_rays=7, n_seg=9, seed=5)
     if soot:
         fraction = np.random.default_rng(6).uniform(0.0, 5e-6, fields.shape[1:])
         fields = np.concatenate([fields, fraction[None]])
-    tables = RTETables.from_spline(ETA, NODES, COEF, 101325.0, dtype, "table",
+    _, _, sigma = synthetic_sigma(n_eta=ETA.size, zero_species=zero_species)
+    tables = RTETables.from_spline(ETA, NODES, PiecewiseCubic(NODES, sigma).coef, 101325.0,
+                                   dtype, "table",
                                    soot=rayleigh_soot_constant() if soot else None)
+    assert len(tables.species) == 3 - len(zero_species) + soot
     background = np.random.default_rng(2).uniform(0.0, 0.5, (7, ETA.size))
     return tables, fields, lengths, background
 
@@ -74,7 +81,11 @@ def test_numba_sweep_gives_the_gradients_of_the_xla_sweep(dtype, rtol, soot):
 def test_numba_forward_and_forward_mode_sweeps_give_the_xla_values(dtype, rtol, soot,
                                                                    with_background):
     tables, fields, lengths, background = scene(dtype, soot)
-    background = background if with_background else None
+    assert_same_values(tables, fields, lengths, background if with_background else None, rtol)
+
+
+def assert_same_values(tables, fields, lengths, background, rtol):
+    """The Numba forward and forward-mode sweeps' radiance and tangent are XLA's."""
     rng = np.random.default_rng(3)
     d_fields = rng.standard_normal(fields.shape) * np.r_[30.0, [0.01] * (fields.shape[0] - 1)][
         :, None, None]
@@ -89,6 +100,33 @@ def test_numba_forward_and_forward_mode_sweeps_give_the_xla_values(dtype, rtol, 
     assert np.abs(xla[0]).max() > 0 and np.abs(xla[2]).max() > 0
     assert_same_gradients(xla, ours, rtol)
     assert_same_gradients(ours[:1], ours[1:2], rtol)  # the JVP's value is the forward's
+
+
+@pytest.mark.parametrize("zero_species", [(1, 2), ()], ids=["one gas", "three gases"])
+def test_numba_sweeps_written_out_for_one_and_three_gases_give_the_xla_results(zero_species):
+    tables, fields, lengths, background = scene(np.float64, True, zero_species)
+    xla = gradients(tables, fields, lengths, background, "xla")
+    assert_same_gradients(xla, gradients(tables, fields, lengths, background, "numba"), 1e-12)
+    assert_same_values(tables, fields, lengths, background, 1e-12)
+
+
+def test_the_sweeps_source_is_written_once_and_elsewhere_when_the_cache_cannot_be(tmp_path,
+                                                                                monkeypatch):
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    path = _source_file("x = 1\n", "probe")
+    assert path.parent == tmp_path / "invflame" and path.read_text() == "x = 1\n"
+    written = path.stat().st_mtime_ns
+    assert _source_file("x = 1\n", "probe") == path and path.stat().st_mtime_ns == written
+    assert _source_file("x = 2\n", "probe") != path  # other source, other file
+    blocked = tmp_path / "a file"
+    blocked.write_text("")
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(blocked))  # no directory can be made in a file
+    assert _source_file("x = 1\n", "probe").parent == Path(tempfile.gettempdir()) / "invflame"
+
+
+def test_the_sweeps_refuse_more_than_one_soot_row():
+    with pytest.raises(ValueError, match="at most one soot row; got n_gas = 2, n_tau = 4"):
+        _kernels(2, 4)
 
 
 def test_float64_stays_float64_with_64_bit_mode_in_the_callers_thread_only():
