@@ -44,6 +44,8 @@ from llvmlite import ir
 from numba.core import types
 from numba.extending import intrinsic, overload
 
+from operators.disk_cache import cache_dir
+
 __all__ = ["sweep", "sweep_jvp", "sweep_vjp"]
 
 
@@ -264,26 +266,24 @@ def _source_file(source: str, stem: str) -> Path:
 
     The name carries a hash of the source and of this module, so a file once written never
     changes (Numba keys its cache on the file's time stamp; a change to the helpers here makes
-    new files). The directory is ``$NUMBA_CACHE_DIR/invflame`` if set, else
-    ``$XDG_CACHE_HOME/invflame`` (``~/.cache/invflame``), else, if that cannot be written, one
-    in the temporary directory.
+    new files). The folder is ``sweeps`` in :func:`operators.disk_cache.cache_dir`, or, if that
+    cannot be written, ``invflame-sweeps`` in the temporary directory.
     """
     digest = hashlib.sha256(source.encode() + Path(__file__).read_bytes()).hexdigest()[:16]
-    cache = os.environ.get("NUMBA_CACHE_DIR") or os.environ.get("XDG_CACHE_HOME") or (
-        Path.home() / ".cache")
-    for directory in (Path(cache) / "invflame", Path(tempfile.gettempdir()) / "invflame"):
-        path = directory / f"{stem}_{digest}.py"
+    folders = (cache_dir() / "sweeps", Path(tempfile.gettempdir()) / "invflame-sweeps")
+    for folder in folders:
+        path = folder / f"{stem}_{digest}.py"
         try:
             if not path.exists():  # written whole, then renamed: no process reads half a file
-                directory.mkdir(parents=True, exist_ok=True)
-                partial = directory / f".{path.name}.{os.getpid()}"
+                folder.mkdir(parents=True, exist_ok=True)
+                partial = folder / f".{path.name}.{os.getpid()}"
                 partial.write_text(source)
                 os.replace(partial, path)
             return path
         except OSError as error:
             failure = error
-    raise OSError(f"cannot write the compiled sweeps' source to {cache}/invflame or the "
-                  f"temporary directory; set NUMBA_CACHE_DIR to a writable directory") from failure
+    raise OSError(f"cannot write the compiled sweeps' source to {folders[0]} or "
+                  f"{folders[1]}; set INVFLAME_CACHE to a writable folder") from failure
 
 
 def _order(n_segments):

@@ -14,10 +14,8 @@ from __future__ import annotations
 
 import hashlib
 import logging
-import os
 from dataclasses import dataclass, fields
 from importlib import resources
-from pathlib import Path
 
 import numpy as np
 from scipy import constants
@@ -29,6 +27,7 @@ from invflame.spectroscopy.cross_section import WING_CUTOFF, cross_section, defa
 from invflame.spectroscopy.line_parameters import ATM
 from invflame.spectroscopy.linelist import LineList, read_par
 from invflame.spectroscopy.partition import hapi_module
+from operators.disk_cache import cache_dir
 from operators.planck import planck
 from operators.tabulated import PiecewiseCubic
 
@@ -78,11 +77,6 @@ def default_linelists(wavenumber=None) -> dict:
     with resources.as_file(resources.files("invflame") / "data" / H2O_PACKAGE_FILE) as path:
         h2o = read_par(path, nu_range=reach)
     return {"CO2": generate_co2_lines().window(*reach), "H2O": h2o}
-
-
-def cache_dir() -> Path:
-    """Folder for cached tables: ``$INVFLAME_CACHE`` or ``~/.cache/invflame``."""
-    return Path(os.environ.get("INVFLAME_CACHE") or Path.home() / ".cache" / "invflame")
 
 
 def _hash_lines(digest, lines: LineList) -> None:
@@ -261,12 +255,12 @@ class AbsorptionTable:
     ) -> AbsorptionTable:
         """:meth:`build`, or load the table built from the same inputs from the disk cache.
 
-        Arguments as :meth:`build`. The cache file (in :func:`cache_dir`) is named by
-        :func:`table_key`, a hash of the line data, grid, temperature nodes, pressure,
-        self-broadening fractions and :data:`TABLE_VERSION`; it holds that key and a hash of
-        its own arrays. A cache file that is damaged (empty, truncated, garbage), holds
-        another key or fails its hash is rebuilt, with a warning naming it on the
-        ``invflame.spectroscopy.absorption_table`` logger.
+        Arguments as :meth:`build`. The cache file (in ``$INVFLAME_CACHE``, by default
+        ``~/.cache/invflame``) is named by :func:`table_key`, a hash of the line data, grid,
+        temperature nodes, pressure, self-broadening fractions and :data:`TABLE_VERSION`; it
+        holds that key and a hash of its own arrays. A cache file that is damaged (empty,
+        truncated, garbage), holds another key or fails its hash is rebuilt, with a warning
+        naming it on the ``invflame.spectroscopy.absorption_table`` logger.
         """
         species, wavenumber, temperatures, fractions = _resolve(
             linelists, species, wavenumber, temperatures, self_fraction

@@ -112,16 +112,17 @@ def test_numba_sweeps_written_out_for_one_and_three_gases_give_the_xla_results(z
 
 def test_the_sweeps_source_is_written_once_and_elsewhere_when_the_cache_cannot_be(tmp_path,
                                                                                 monkeypatch):
-    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("INVFLAME_CACHE", str(tmp_path))
     path = _source_file("x = 1\n", "probe")
-    assert path.parent == tmp_path / "invflame" and path.read_text() == "x = 1\n"
+    assert path.parent == tmp_path / "sweeps" and path.read_text() == "x = 1\n"
     written = path.stat().st_mtime_ns
     assert _source_file("x = 1\n", "probe") == path and path.stat().st_mtime_ns == written
     assert _source_file("x = 2\n", "probe") != path  # other source, other file
     blocked = tmp_path / "a file"
     blocked.write_text("")
-    monkeypatch.setenv("NUMBA_CACHE_DIR", str(blocked))  # no directory can be made in a file
-    assert _source_file("x = 1\n", "probe").parent == Path(tempfile.gettempdir()) / "invflame"
+    monkeypatch.setenv("INVFLAME_CACHE", str(blocked))  # no folder can be made in a file
+    assert _source_file("x = 1\n", "probe").parent == (Path(tempfile.gettempdir())
+                                                        / "invflame-sweeps")
 
 
 def test_the_sweeps_refuse_more_than_one_soot_row():
