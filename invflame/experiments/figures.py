@@ -4,6 +4,7 @@ and camera images."""
 from __future__ import annotations
 
 import csv
+import json
 from pathlib import Path
 
 import matplotlib
@@ -25,16 +26,46 @@ def read_history(path) -> dict[str, np.ndarray]:
     return {key: np.array([float(r[key]) for r in rows]) for key in rows[0]} if rows else {}
 
 
-def loss_curves(runs: dict[str, Path], path) -> Path:
-    """Loss against iteration for each run (log scale), one line per run."""
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+def loss_series(runs: dict[str, Path]) -> dict[str, dict[str, np.ndarray | None]]:
+    """Each run's objective and data misfit against epochs, from its ``history.csv``.
+
+    An iteration is an epoch for the voxel solvers and one batch of rays for the neural field;
+    the run's ``summary.json`` (iterations and epochs) sets the scale, one iteration per epoch
+    without it. ``misfit`` is None for a run that logged none (a stochastic neural-field run
+    logs its loss only).
+    """
+    series = {}
     for label, folder in runs.items():
         history = read_history(Path(folder) / "history.csv")
-        axes[0].semilogy(history["iteration"], history["loss"], label=label)
-        axes[1].semilogy(history["iteration"], history["misfit"], label=label)
-    axes[0].set(xlabel="iteration (epoch)", ylabel="loss", title="objective")
-    axes[1].set(xlabel="iteration (epoch)", ylabel="‖F(θ) − d‖² [(W/(m²·sr·cm⁻¹))²]",
-                title="data misfit (stochastic neural-field runs log their loss only)")
+        summary = Path(folder) / "summary.json"
+        per_iteration = 1.0
+        if summary.exists():
+            done = json.loads(summary.read_text())
+            per_iteration = done["epochs"] / done["iterations"] if done["iterations"] else 1.0
+        misfit = history["misfit"]
+        series[label] = {"epoch": history["iteration"] * per_iteration, "loss": history["loss"],
+                         "misfit": misfit if np.isfinite(misfit).any() else None}
+    return series
+
+
+def loss_curves(runs: dict[str, Path], path) -> Path:
+    """Objective (and data misfit, where logged) against epoch for each run, log scale."""
+    series = loss_series(runs)
+    with_misfit = {label: s for label, s in series.items() if s["misfit"] is not None}
+    fig, axes = plt.subplots(1, 2 if with_misfit else 1, figsize=(11 if with_misfit else 6, 4),
+                             squeeze=False)
+    axes = axes[0]
+    for label, s in series.items():
+        axes[0].semilogy(s["epoch"], s["loss"], label=label)
+    axes[0].set(xlabel="epoch (one pass over all rays)", ylabel="loss", title="objective")
+    if with_misfit:
+        for label, s in with_misfit.items():
+            axes[1].semilogy(s["epoch"], s["misfit"], label=label)
+        unlogged = sorted(set(series) - set(with_misfit))
+        axes[1].set(xlabel="epoch (one pass over all rays)",
+                    ylabel="‖F(θ) − d‖² [(W/(m²·sr·cm⁻¹))²]",
+                    title="data misfit" + (f" (not logged by {', '.join(unlogged)})"
+                                           if unlogged else ""))
     for ax in axes:
         ax.grid(True, which="both", alpha=0.3)
     axes[0].legend(fontsize=8)

@@ -1,9 +1,11 @@
-"""The field figures of a comparison, from its run folders."""
+"""The figures of a comparison, from its run folders."""
+
+import json
 
 import matplotlib.image
 import numpy as np
 
-from invflame.experiments.figures import field_figures, run_fields
+from invflame.experiments.figures import field_figures, loss_curves, loss_series, run_fields
 
 
 def test_field_figures_of_run_folders(tmp_path, plume_fields):
@@ -23,3 +25,27 @@ def test_field_figures_of_run_folders(tmp_path, plume_fields):
     assert all(shape[1] == 1600 for shape in rows.values())
     # four rows of cutaways (truth, start, two methods) against three rows of errors
     assert rows["cutaways.png"][0] > rows["errors.png"][0]
+
+
+def _history(folder, iterations, misfit, epochs):
+    folder.mkdir()
+    rows = ["iteration,loss,misfit,regularizer,grad_norm,time"]
+    rows += [f"{i},{10.0 / (i + 1)},{misfit},nan,1.0,{0.5 * i}" for i in range(iterations + 1)]
+    (folder / "history.csv").write_text("\n".join(rows) + "\n")
+    (folder / "summary.json").write_text(json.dumps({"iterations": iterations,
+                                                      "epochs": epochs}))
+
+
+def test_loss_series_in_epochs_and_misfit_only_where_logged(tmp_path):
+    _history(tmp_path / "VG-TV", 8, 0.5, 8.0)
+    _history(tmp_path / "NN-TV", 8, "nan", 2.0)   # four batches of rays per epoch
+    runs = {"VG/TV": tmp_path / "VG-TV", "NN/TV": tmp_path / "NN-TV"}
+    series = loss_series(runs)
+    np.testing.assert_allclose(series["VG/TV"]["epoch"], np.arange(9.0))
+    np.testing.assert_allclose(series["NN/TV"]["epoch"], np.arange(9.0) / 4)
+    np.testing.assert_allclose(series["VG/TV"]["misfit"], 0.5)
+    assert series["NN/TV"]["misfit"] is None
+    both = matplotlib.image.imread(loss_curves(runs, tmp_path / "both.png"))
+    alone = matplotlib.image.imread(loss_curves({"NN/TV": runs["NN/TV"]}, tmp_path / "nn.png"))
+    # the misfit panel is left out when no run logged a misfit
+    assert alone.shape[1] < both.shape[1]
