@@ -36,6 +36,7 @@ import xarray as xr
 from pyevtk.hl import imageToVTK
 
 from invflame import __version__
+from invflame.atomic_files import read_json
 from invflame.field import Field
 
 FIELD_SETS = {"truth": "truth.npz", "start": "initial.npz", "reconstruction": "reconstruction.npz"}
@@ -261,7 +262,7 @@ def run_attributes(folder) -> dict[str, str]:
         attrs["invflame_config"] = text
         attrs["config_summary"] = config_summary(cfg)
     if summary_file.is_file():
-        summary = json.loads(summary_file.read_text())
+        summary = read_json(summary_file)
         attrs.update({f"protocol_{k}": str(v) for k, v in summary.get("protocol", {}).items()})
         if "mse" in summary:
             attrs["mse"] = json.dumps(summary["mse"])

@@ -4,7 +4,6 @@ and camera images."""
 from __future__ import annotations
 
 import csv
-import json
 from pathlib import Path
 
 import matplotlib
@@ -13,6 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from invflame.atomic_files import read_json  # noqa: E402
 from invflame.experiments.metrics import normalized_mse  # noqa: E402
 from invflame.field import Field  # noqa: E402
 from invflame.plotting.comparison import plot_comparison, plot_errors  # noqa: E402
@@ -40,7 +40,7 @@ def loss_series(runs: dict[str, Path]) -> dict[str, dict[str, np.ndarray | None]
         summary = Path(folder) / "summary.json"
         per_iteration = 1.0
         if summary.exists():
-            done = json.loads(summary.read_text())
+            done = read_json(summary)
             per_iteration = done["epochs"] / done["iterations"] if done["iterations"] else 1.0
         misfit = history["misfit"]
         series[label] = {"epoch": history["iteration"] * per_iteration, "loss": history["loss"],
@@ -57,16 +57,16 @@ def loss_curves(runs: dict[str, Path], path) -> Path:
     axes = axes[0]
     for label, s in series.items():
         axes[0].semilogy(s["epoch"], s["loss"], label=label)
-    axes[0].set(xlabel="epoch (one pass over all rays)", ylabel="loss", title="objective")
+    axes[0].set(ylabel="loss", title="objective")
     if with_misfit:
         for label, s in with_misfit.items():
             axes[1].semilogy(s["epoch"], s["misfit"], label=label)
         unlogged = sorted(set(series) - set(with_misfit))
-        axes[1].set(xlabel="epoch (one pass over all rays)",
-                    ylabel="‖F(θ) − d‖² [(W/(m²·sr·cm⁻¹))²]",
+        axes[1].set(ylabel="‖F(θ) − d‖² [(W/(m²·sr·cm⁻¹))²]",
                     title="data misfit" + (f" (not logged by {', '.join(unlogged)})"
                                            if unlogged else ""))
     for ax in axes:
+        ax.set_xlabel("epoch (one pass over all rays)")
         ax.grid(True, which="both", alpha=0.3)
     axes[0].legend(fontsize=8)
     fig.tight_layout()
