@@ -4,8 +4,8 @@ Run: ``python benchmarks/bench_memory.py [--cells 60] [--pixels 32] [--rays-per-
 [--epochs 10] [--phantom synthetic] [--default-allocator]``.
 
 A process that does what a voxel reconstruction does and nothing else, with the C allocator set
-as the ``invflame`` command sets it (:func:`invflame.process_memory.map_large_blocks`; glibc's
-defaults with ``--default-allocator``): builds
+as the ``invflame`` command sets it (:func:`invflame.process_memory.limit_malloc_arenas`;
+glibc's defaults with ``--default-allocator``): builds
 :meth:`invflame.scene.Scene.paper`, makes its data with the forward map, compiles the value and
 gradient of the least-squares misfit ``0.5 ||H(f) - g||²`` and runs ``--epochs`` of it. Prints
 the process's peak resident set size (MiB) after each step, and the
@@ -21,9 +21,9 @@ from pathlib import Path
 
 import jax
 import jax.numpy as jnp
+from allocator import add_argument, apply
 
 from invflame.phantoms.registry import make_phantom
-from invflame.process_memory import map_large_blocks
 from invflame.scene import Scene
 
 
@@ -49,16 +49,13 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--epochs", type=int, default=10, help="gradient evaluations")
     p.add_argument("--phantom", default="synthetic",
                    help="ground-truth field by name (invflame.phantoms.registry)")
-    p.add_argument("--default-allocator", action="store_true",
-                   help="leave glibc's malloc as it is (default: as the invflame command "
-                   "sets it, invflame.process_memory.map_large_blocks)")
+    add_argument(p)
     return p
 
 
 def main() -> None:
     args = parser().parse_args()
-    allocator = "glibc's defaults" if args.default_allocator else (
-        "large blocks mapped" if map_large_blocks() else "allocator unchanged (not glibc)")
+    allocator = apply(args.default_allocator)
     steps = {"imported": peak_mib()}
     scene = Scene.paper(args.cells, args.pixels, rays_per_pixel=args.rays_per_pixel)
     fields = jnp.asarray(make_phantom(args.phantom, grid=scene.grid).values, jnp.float32)

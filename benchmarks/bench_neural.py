@@ -23,9 +23,11 @@ time they run: the first call took twice as long (1.10 against 0.55 s for the ba
 samples per ray). Peak
 resident memory is read after the neural-field epoch, before the voxel epoch runs. The paper
 reports 479–493 ms per epoch and 65–66 MB on a GPU for its neural field (Tricard, Chen & Deng
-2026, Table 1).
+2026, Table 1). The C allocator is set as the ``invflame`` command sets it (glibc's defaults
+with ``--default-allocator``; ``benchmarks/allocator.py``).
 
     python benchmarks/bench_neural.py [--rays-per-pixel 9] [--batches N] [--centres]
+        [--default-allocator]
 """
 
 import argparse
@@ -35,6 +37,7 @@ from functools import partial
 
 import numpy as np
 import torch
+from allocator import add_argument, apply
 
 from invflame.phantoms import synthetic_plume
 from invflame.representations.neural import NeuralCentresRepresentation, NeuralFieldRepresentation
@@ -157,14 +160,16 @@ def main():
                         help="timed voxel (and neural-centres) epochs, best taken")
     parser.add_argument("--centres", action="store_true",
                         help="also time the neural-centres representation")
+    add_argument(parser)
     args = parser.parse_args()
+    allocator = apply(args.default_allocator)
 
     scene = Scene.paper(rays_per_pixel=args.rays_per_pixel)
     truth = synthetic_plume(scene.grid).values
     data = scene.simulate(truth)
     print(f"scene: {scene.grid.shape} grid, {scene.n_rays} rays x {scene.rays_per_pixel} "
           f"sub-rays, {scene.wavenumber.size} wavenumbers -> {scene.out_wavenumber.size} "
-          f"outputs, {scene.dtype}; {torch.get_num_threads()} torch threads")
+          f"outputs, {scene.dtype}; {torch.get_num_threads()} torch threads; {allocator}")
     rep = NeuralFieldRepresentation(scene, n_coarse=args.n_coarse, n_fine=args.n_fine,
                                     batch_rays=args.batch_rays, chunk_rays=args.chunk_rays,
                                     batch_centres=args.batch_centres)

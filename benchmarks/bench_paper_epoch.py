@@ -5,9 +5,12 @@ paper`` (60³ voxels, four cameras of 32×32 pixels, 650–725 cm⁻¹ at 0.04 c
 epochs each through the same runner
 as the full comparison (pretraining shortened to ``--pretrain`` steps: it does not change the
 cost of an epoch), and prints seconds per epoch, parameter memory and the process's peak
-resident memory, next to the paper's Table 1 (GPU, 2000 epochs).
+resident memory, next to the paper's Table 1 (GPU, 2000 epochs). The C allocator is set as the
+``invflame`` command sets it (glibc's defaults with ``--default-allocator``;
+``benchmarks/allocator.py``).
 
     python benchmarks/bench_paper_epoch.py [--epochs 3] [--pretrain 50] [--out DIR] [--all]
+        [--default-allocator]
 """
 
 import argparse
@@ -15,6 +18,8 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
+
+from allocator import add_argument, apply
 
 from invflame.experiments import reproduce, runner
 
@@ -29,14 +34,17 @@ def main():
                         "process, so that peak memories are separate)")
     parser.add_argument("--all", action="store_true",
                         help="all six methods (default: VG/TV and NN/Tikh.)")
+    add_argument(parser)
     args = parser.parse_args()
     out = args.out or Path(tempfile.mkdtemp(prefix="invflame-paper-epoch-"))
     if args.method is None:
         for method in reproduce.METHODS if args.all else ("VG/TV", "NN/Tikh."):
             subprocess.run([sys.executable, __file__, "--method", method, "--epochs",
                             str(args.epochs), "--pretrain", str(args.pretrain), "--out",
-                            str(out)], check=True)
+                            str(out)] + ["--default-allocator"] * args.default_allocator,
+                           check=True)
         return
+    allocator = apply(args.default_allocator)
     cfg = reproduce.method_config("paper", args.method)
     cfg["solver"]["iterations"] = args.epochs  # the runner counts a solver's iterations in epochs
     cfg["representation"]["pretrain_iterations"] = args.pretrain
@@ -46,7 +54,8 @@ def main():
     print(f"{args.method:>9}: {summary['seconds_per_epoch']:.2f} s per epoch "
           f"({summary['epochs']:g} epochs, {summary['iterations']} iterations), parameters "
           f"{summary['parameter_memory_mb']:.2f} MB, process peak "
-          f"{summary['peak_memory_mb']:.0f} MB   [paper, GPU: {paper[0]} ms, {paper[1]} MB]",
+          f"{summary['peak_memory_mb']:.0f} MB, {allocator}   "
+          f"[paper, GPU: {paper[0]} ms, {paper[1]} MB]",
           flush=True)
 
 
