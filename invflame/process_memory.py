@@ -36,8 +36,9 @@ def limit_malloc_arenas(arenas: int = 1) -> bool:
     """Have glibc's ``malloc`` serve every thread of the process from at most ``arenas``
     arenas, so that blocks one thread frees are reused by the others.
 
-    Called by the ``invflame`` command before it runs, before the numerical libraries start
-    their threads (a thread keeps the arena it first allocated from); affects the whole
+    Called by the ``invflame`` command before it runs, after its imports and before the
+    numerical libraries start their worker threads (importing torch, JAX and Numba starts one
+    helper thread each; a thread keeps the arena it first allocated from); affects the whole
     process.
 
     Parameters
