@@ -37,9 +37,8 @@ def limit_malloc_arenas(arenas: int = 1) -> bool:
     arenas, so that blocks one thread frees are reused by the others.
 
     Called by the ``invflame`` command before it runs, after its imports and before the
-    numerical libraries start their worker threads (importing torch, JAX and Numba starts one
-    helper thread each; a thread keeps the arena it first allocated from); affects the whole
-    process.
+    numerical libraries start their worker threads (the imports start two helper threads,
+    which keep the arenas they first allocated from); affects the whole process.
 
     Parameters
     ----------
