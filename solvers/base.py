@@ -151,6 +151,9 @@ class Solver:
     #: :mod:`solvers.options`); ``help(solver_class.Options)`` lists them.
     Options: type[SolverOptions] = SolverOptions
     stochastic_ok = True
+    #: Whether an iteration applies the problem's Jacobians many times (an inner linear solve,
+    #: a linearized operator): such a solver refuses a problem that is not linearizable.
+    applies_jacobians = False
     #: Whether resuming from a checkpoint reproduces an uninterrupted run exactly.
     exact_resume = True
 
@@ -192,6 +195,14 @@ class Solver:
         """Raise :class:`UnsupportedProblemError` if this solver should not solve ``problem``."""
         if not isinstance(problem, Problem):
             raise TypeError(f"expected a solvers.Problem, got {type(problem).__name__}")
+        if self.applies_jacobians and not problem.linearizable:
+            advice = f" {problem.advice}" if problem.advice else ""
+            raise UnsupportedProblemError(
+                f"solver {self.name!r} applies the Jacobians of the problem many times per "
+                f"iteration, but {problem.name} is not linearizable (one Jacobian product costs "
+                f"a whole pass over the data).{advice} First-order solvers ('adam', 'gd') and "
+                "'lbfgs' take it."
+            )
         if problem.stochastic and not self.stochastic_ok:
             raise UnsupportedProblemError(
                 f"solver {self.name!r} needs the full deterministic objective but the problem "

@@ -36,7 +36,6 @@ from scipy.sparse.linalg import lsqr
 
 import operators
 from solvers.base import Solver, Step, UnsupportedProblemError
-from solvers.capabilities import require_linearizable
 from solvers.options import SolverOptions, option
 from solvers.problem import sum_of_squares
 from solvers.registry import register
@@ -109,11 +108,7 @@ class GaussNewton(Solver):
 
     Options = GaussNewtonOptions
     stochastic_ok = False
-
-    def check(self, problem):
-        """The linearizable capability first: it decides whether this solver fits at all."""
-        require_linearizable(self.name, problem)
-        super().check(problem)
+    applies_jacobians = True
 
     def check_problem(self, problem):
         reg = problem.regularizer

@@ -33,7 +33,6 @@ import numpy as np
 import operators
 from operators import Composite
 from solvers.base import Solver, Step, UnsupportedProblemError
-from solvers.capabilities import require_linearizable
 from solvers.options import SolverOptions, option
 from solvers.registry import register
 
@@ -101,11 +100,7 @@ class PDHG(Solver):
 
     Options = PDHGOptions
     stochastic_ok = False
-
-    def check(self, problem):
-        """The linearizable capability first: it decides whether this solver fits at all."""
-        require_linearizable(self.name, problem)
-        super().check(problem)
+    applies_jacobians = True
 
     def check_problem(self, problem):
         reg = problem.regularizer
