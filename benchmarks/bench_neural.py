@@ -12,7 +12,8 @@ epoch is one pass over all rays, forward and backward:
   voxel centres, gradient by backpropagation through the networks and the emission kernel's
   VJP);
 * neural centres (``--centres``): one evaluation of the full objective and its gradient
-  (network at all voxel centres, voxel forward map, its VJP, the network's VJP).
+  (network at all voxel centres, once for the data and the regularizer; voxel forward map,
+  its VJP; the network's VJP).
 
 Compilation runs first (one warm-up iteration or evaluation) and is not timed. Times are wall
 clock and CPU time of the process (all threads; steadier than wall time on a shared machine);
@@ -206,6 +207,8 @@ def main():
         centres = centres_epoch(scene, data, args.repeats)
         print(f"neural centres: epoch (objective + gradient, best of {args.repeats}): "
               f"{seconds(centres)}")
+        print(f"  neural centres / voxel epoch: {centres[0] / voxel[0]:.2f} wall, "
+              f"{centres[1] / voxel[1]:.2f} CPU")
     print(f"peak resident memory of this process: {peak_rss_mb():.0f} MB")
 
 

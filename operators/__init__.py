@@ -6,8 +6,8 @@ it changes nothing in the process: it does not import torch (only building a
 64-bit mode; an operator of dtype float64 computes in float64 inside :func:`precision` only.
 """
 
-import operators.algebra  # noqa: F401  (registers the combinations that ``A @ B`` etc. build)
 from operators.adapters import JaxOperator, TorchOperator, aslinearoperator
+from operators.algebra import linearize_together  # also registers what ``A @ B`` etc. build
 from operators.averaging import RowMean
 from operators.base import Identity, Jacobian, LinearOperator, Operator, precision
 from operators.checks import (
@@ -69,6 +69,7 @@ __all__ = [
     "emission_radiance_jvp",
     "gradient_taylor_test",
     "jacobian_dottest",
+    "linearize_together",
     "operator_norm",
     "planck",
     "precision",

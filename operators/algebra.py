@@ -10,6 +10,9 @@ part once per point: the Jacobian of ``A + B`` at ``x`` is the sum of the parts'
 This module imports :mod:`operators.base`, never the other way round: its classes register
 themselves with :func:`operators.base.register`, through which the base class's methods build
 them and ``operators.base.Composition`` (and so on) stays importable.
+
+:func:`linearize_together` linearizes several chains of compositions that end in the same
+factors (a data map and a regularizer after one reparameterization) with those factors once.
 """
 
 from __future__ import annotations
@@ -80,6 +83,73 @@ class Composition(Operator):
         j_outer = self.outer.linearize(self._mid(j_inner.value))
         return _jacobian_from(self, x, j_outer.value,
                               _linear_if_possible(Composition(j_outer, j_inner)))
+
+
+def _factors(op: Operator) -> list[Operator]:
+    """The factors of a chain of compositions, outermost first (``[op]`` if it is none)."""
+    if isinstance(op, _LinearView) and isinstance(op.combination, Composition):
+        op = op.combination
+    if isinstance(op, Composition):
+        return _factors(op.outer) + _factors(op.inner)
+    return [op]
+
+
+def _compose(factors: Sequence[Operator]) -> Operator:
+    """``factors[0] @ factors[1] @ ...``, innermost first composed."""
+    out = factors[-1]
+    for factor in reversed(factors[:-1]):
+        out = factor @ out
+    return out
+
+
+def linearize_together(ops: Sequence[Operator], x):
+    r"""Operators on one input linearized at ``x``, their common innermost factors once.
+
+    When every operator of ``ops`` is a chain of compositions ending in the same factors
+    :math:`P` (the same objects: :math:`F_i = A_i \circ P`, e.g. a data map and a regularizer
+    after one reparameterization), :math:`P` is evaluated and linearized once, and a sum of
+    the operators' pullbacks passes through :math:`J_P^\mathsf{T}` once:
+    :math:`\sum_i J_{F_i}^\mathsf{T} w_i = J_P^\mathsf{T} \sum_i J_{A_i}^\mathsf{T} w_i`.
+    Otherwise each operator is linearized on its own.
+
+    Parameters
+    ----------
+    ops : sequence of Operator
+        Operators with the same input shape.
+    x : ndarray
+        The point, shape ``ops[0].dims``.
+
+    Returns
+    -------
+    jacobians : list of Jacobian
+        :math:`J_{F_i}(x)`, each with its ``.value`` :math:`F_i(x)`.
+    pull : callable
+        ``pull(ws)`` is :math:`\sum_i J_{F_i}(x)^\mathsf{T} w_i` for cotangents ``ws`` shaped
+        as the operators' outputs (None for a term left out), shape ``ops[0].dims``.
+    """
+    chains = [_factors(op) for op in ops]
+    shared = 0
+    while (shared < min(len(c) for c in chains) - 1
+           and all(c[-1 - shared] is chains[0][-1 - shared] for c in chains)):
+        shared += 1
+    if shared == 0:
+        jacobians = [op.linearize(x) for op in ops]
+        return jacobians, lambda ws: sum(np.reshape(j.adjoint(w), ops[0].dims)
+                                         for j, w in zip(jacobians, ws, strict=True)
+                                         if w is not None)
+    inner = _compose(chains[0][-shared:])
+    j_inner = inner.linearize(x)
+    outers = [_compose(c[:-shared]) for c in chains]
+    j_outers = [o.linearize(np.reshape(j_inner.value, o.dims)) for o in outers]
+    jacobians = [_jacobian_from(op, x, j.value, _linear_if_possible(Composition(j, j_inner)))
+                 for op, j in zip(ops, j_outers, strict=True)]
+
+    def pull(ws):
+        w_inner = sum(np.reshape(j.adjoint(w), inner.dimsd)
+                      for j, w in zip(j_outers, ws, strict=True) if w is not None)
+        return np.reshape(j_inner.adjoint(w_inner), ops[0].dims)
+
+    return jacobians, pull
 
 
 class _Combination(Operator):

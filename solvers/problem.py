@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from operators import Composite, Operator
+from operators import Composite, Operator, linearize_together
 
 #: :math:`\Phi = g \circ K` as solvers name it: the class :class:`operators.Composite` itself.
 Regularizer = Composite
@@ -246,6 +246,10 @@ class Problem:
     def evaluate(self, x, iteration: int = 0, seed: int = 0) -> Evaluation:
         """The objective at ``x``; gradient computed on demand (one reverse pass).
 
+        A data map and regularizer after the same inner operator (e.g. a network at the voxel
+        centres) evaluate it once and pull back through it once
+        (:func:`operators.linearize_together`).
+
         ``iteration`` and ``seed`` only matter for a stochastic ``value_and_grad``.
         """
         if self.stochastic:
@@ -253,20 +257,19 @@ class Problem:
                                                                                  iteration]))
             grad = np.asarray(grad, dtype=self.dtype).reshape(self.dims)
             return Evaluation(loss, np.nan, np.nan, grad=grad, sample=iteration)
-        jf = self.forward.linearize(x)
+        ops = [self.forward] + ([] if self.regularizer is None else [self.regularizer.op])
+        jacobians, pull = linearize_together(ops, x)
+        jf, jk = jacobians[0], (jacobians[1] if len(jacobians) > 1 else None)
         residual = jf.value - self.data
         misfit = sum_of_squares(residual)
-        reg, jk, z = 0.0, None, None
-        if self.regularizer is not None:
-            jk = self.regularizer.op.linearize(x)
-            z = jk.value
-            reg = float(self.regularizer.functional(z))
+        reg = 0.0 if jk is None else float(self.regularizer.functional(jk.value))
 
         def grad():
-            g = 2.0 * jf.adjoint(residual)
-            if jk is not None and self.lam > 0:
-                g = g + self.lam * jk.adjoint(self.regularizer.functional.grad(z))
-            return np.asarray(g, dtype=self.dtype).reshape(self.dims)
+            ws = [2.0 * residual]
+            if jk is not None:
+                ws.append(self.lam * self.regularizer.functional.grad(jk.value)
+                          if self.lam > 0 else None)
+            return np.asarray(pull(ws), dtype=self.dtype).reshape(self.dims)
 
         return Evaluation(misfit + self.lam * reg, misfit, reg, grad_fn=grad,
                           forward_jacobian=jf, regularizer_jacobian=jk)

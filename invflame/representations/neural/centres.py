@@ -22,9 +22,10 @@ import torch
 import solvers
 from invflame.representations.neural.network import FieldNetwork, centre_points, pretrain
 from invflame.representations.neural.regularizers import regularizer_after
+from invflame.representations.normalization import field_scales, per_field
 from invflame.representations.protocol import Representation
 from invflame.representations.whitening import whitened
-from operators import Operator, TorchOperator
+from operators import Diagonal, Operator, TorchOperator
 
 
 class NeuralCentresRepresentation(Representation):
@@ -57,16 +58,17 @@ class NeuralCentresRepresentation(Representation):
         self.n_parameters = self.network.n_parameters
         self.centres = centre_points(scene.grid, self.network.lower.dtype)
         shape = (4, *self.grid.shape)
-        self.at_centres = self._network_operator(shape, normalized=False)
-        self.normalized_at_centres = self._network_operator(shape, normalized=True)
-        self.forward = (scene.operator if forward is None else forward) @ self.at_centres
 
-    def _network_operator(self, shape, normalized: bool) -> TorchOperator:
         def fields(theta: torch.Tensor) -> torch.Tensor:
-            return self.network.evaluate(theta, self.centres, normalized=normalized)
+            return self.network.evaluate(theta, self.centres)
 
-        name = "NormalizedNetworkAtCentres" if normalized else "NetworkAtCentres"
-        return TorchOperator(fields, (self.n_parameters,), shape, dtype=self.dtype, name=name)
+        self.at_centres = TorchOperator(fields, (self.n_parameters,), shape, dtype=self.dtype,
+                                        name="NetworkAtCentres")
+        # the regularizer after the same operator object as the data map: an evaluation runs
+        # the network once (solvers.Problem.evaluate)
+        self.normalized_at_centres = Diagonal(1.0 / per_field(field_scales(), shape),
+                                              dtype=self.dtype, name="normalize") @ self.at_centres
+        self.forward = (scene.operator if forward is None else forward) @ self.at_centres
 
     def initial_parameters(self, fields=None, iterations: int = 1000, lr: float = 1e-3,
                            seed: int = 0, progress: bool = True) -> np.ndarray:

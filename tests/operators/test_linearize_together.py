@@ -1,0 +1,90 @@
+"""Operators after one inner factor, linearized together: the factor once, the same derivatives."""
+
+import jax.numpy as jnp
+import numpy as np
+import pylops
+import pytest
+import torch
+
+import operators as op
+import solvers
+
+RNG = np.random.default_rng(3)
+W = RNG.standard_normal((8, 5))
+
+
+class CountingInner:
+    """A torch map (5,) -> (2, 4) that counts its evaluations."""
+
+    def __init__(self):
+        self.calls = 0
+        self.op = op.Operator.from_torch(self, (5,), (2, 4), name="P")
+
+    def __call__(self, x):
+        self.calls += 1
+        return torch.sin(torch.as_tensor(W) @ x).reshape(2, 4) + 0.1 * (x**2).sum()
+
+
+def matrix(shape, name):
+    return op.aslinearoperator(pylops.MatrixMult(RNG.standard_normal(shape)), name=name)
+
+
+def outer_maps():
+    """A nonlinear data-like map (8,) -> (7,) and a linear regularizer-like one (8,) -> (3,)."""
+    g = op.Operator.from_jax(lambda u: jnp.tanh(u) + 0.3 * u**2, (8,), (8,), name="g")
+    return matrix((7, 8), "A") @ g, matrix((3, 8), "B") @ op.Diagonal(RNG.uniform(1, 2, 8))
+
+
+def test_the_shared_inner_factor_is_evaluated_once_and_the_derivatives_are_the_chain_rules():
+    inner = CountingInner()
+    a, b = outer_maps()
+    f, k = a @ inner.op, b @ inner.op
+    x, v = RNG.standard_normal(5), RNG.standard_normal(5)
+    wf, wk = RNG.standard_normal(7), RNG.standard_normal(3)
+    separate = (f.vjp(x, wf) + k.vjp(x, wk), f.jvp(x, v), k.jvp(x, v), f(x), k(x))
+
+    inner.calls = 0
+    (jf, jk), pull = op.linearize_together([f, k], x)
+    gradient = pull([wf, wk])
+    assert inner.calls == 1  # once for both values and the pullback of both terms
+    np.testing.assert_allclose(gradient, separate[0], rtol=1e-12)
+    np.testing.assert_allclose(jf @ v, separate[1], rtol=1e-12)
+    np.testing.assert_allclose(jk @ v, separate[2], rtol=1e-12)
+    np.testing.assert_allclose(jf.value, separate[3], rtol=1e-12)
+    np.testing.assert_allclose(jk.value, separate[4], rtol=1e-12)
+    np.testing.assert_allclose(pull([wf, None]), f.vjp(x, wf), rtol=1e-12)
+    assert op.dottest(jf).passed and op.dottest(jk).passed
+
+
+def test_operators_without_a_common_factor_are_linearized_each_on_its_own():
+    first, second = CountingInner(), CountingInner()
+    a, b = outer_maps()
+    f, k = a @ first.op, b @ second.op
+    x, wf, wk = RNG.standard_normal(5), RNG.standard_normal(7), RNG.standard_normal(3)
+    expected = f.vjp(x, wf) + k.vjp(x, wk)
+    first.calls = second.calls = 0
+    (jf, jk), pull = op.linearize_together([f, k], x)
+    np.testing.assert_allclose(pull([wf, wk]), expected, rtol=1e-12)
+    assert first.calls == second.calls == 1
+    np.testing.assert_allclose(jf.value, f(x), rtol=1e-12)
+
+
+@pytest.mark.parametrize("lam", [0.0, 0.7])
+def test_a_problem_with_data_and_regularizer_after_one_inner_map_evaluates_it_once(lam):
+    inner = CountingInner()
+    a, b = outer_maps()
+    data = RNG.standard_normal(7)
+    problem = solvers.Problem(a @ inner.op, data,
+                              regularizer=solvers.Regularizer(op.SquaredL2(), b @ inner.op),
+                              lam=lam)
+    x = RNG.standard_normal(5)
+    f, k = problem.forward, problem.regularizer.op
+    residual = f(x) - data
+    expected = 2.0 * f.vjp(x, residual) + lam * k.vjp(x, problem.regularizer.functional.grad(k(x)))
+
+    inner.calls = 0
+    evaluation = problem.evaluate(x)
+    gradient = evaluation.grad
+    assert inner.calls == 1
+    assert evaluation.misfit == pytest.approx(float(residual @ residual), rel=1e-12)
+    np.testing.assert_allclose(gradient, expected, rtol=1e-12, atol=1e-14)
