@@ -124,19 +124,22 @@ def linearize_together(ops: Sequence[Operator], x):
     jacobians : list of Jacobian
         :math:`J_{F_i}(x)`, each with its ``.value`` :math:`F_i(x)`.
     pull : callable
-        ``pull(ws)`` is :math:`\sum_i J_{F_i}(x)^\mathsf{T} w_i` for cotangents ``ws`` shaped
-        as the operators' outputs (None for a term left out), shape ``ops[0].dims``.
+        ``pull(ws, scales)`` is :math:`\sum_i c_i J_{F_i}(x)^\mathsf{T} w_i` for cotangents
+        ``ws`` shaped as the operators' outputs (None for a term left out) and real scales
+        :math:`c_i`, shape ``ops[0].dims``; each scale multiplies its term's pullback (through
+        the shared factors: before :math:`J_P^\mathsf{T}`), as a caller computing the terms one
+        by one would.
     """
     chains = [_factors(op) for op in ops]
     shared = 0
-    while (shared < min(len(c) for c in chains) - 1
+    while (len(ops) > 1 and shared < min(len(c) for c in chains) - 1
            and all(c[-1 - shared] is chains[0][-1 - shared] for c in chains)):
         shared += 1
     if shared == 0:
         jacobians = [op.linearize(x) for op in ops]
-        return jacobians, lambda ws: sum(np.reshape(j.adjoint(w), ops[0].dims)
-                                         for j, w in zip(jacobians, ws, strict=True)
-                                         if w is not None)
+        return jacobians, lambda ws, scales: sum(
+            c * np.reshape(j.adjoint(w), ops[0].dims)
+            for j, w, c in zip(jacobians, ws, scales, strict=True) if w is not None)
     inner = _compose(chains[0][-shared:])
     j_inner = inner.linearize(x)
     outers = [_compose(c[:-shared]) for c in chains]
@@ -144,9 +147,9 @@ def linearize_together(ops: Sequence[Operator], x):
     jacobians = [_jacobian_from(op, x, j.value, _linear_if_possible(Composition(j, j_inner)))
                  for op, j in zip(ops, j_outers, strict=True)]
 
-    def pull(ws):
-        w_inner = sum(np.reshape(j.adjoint(w), inner.dimsd)
-                      for j, w in zip(j_outers, ws, strict=True) if w is not None)
+    def pull(ws, scales):
+        w_inner = sum(c * np.reshape(j.adjoint(w), inner.dimsd)
+                      for j, w, c in zip(j_outers, ws, scales, strict=True) if w is not None)
         return np.reshape(j_inner.adjoint(w_inner), ops[0].dims)
 
     return jacobians, pull

@@ -265,11 +265,11 @@ class Problem:
         reg = 0.0 if jk is None else float(self.regularizer.functional(jk.value))
 
         def grad():
-            ws = [2.0 * residual]
+            ws = [residual]
             if jk is not None:
-                ws.append(self.lam * self.regularizer.functional.grad(jk.value)
-                          if self.lam > 0 else None)
-            return np.asarray(pull(ws), dtype=self.dtype).reshape(self.dims)
+                ws.append(self.regularizer.functional.grad(jk.value) if self.lam > 0 else None)
+            return np.asarray(pull(ws, (2.0, self.lam)[:len(ws)]), dtype=self.dtype).reshape(
+                self.dims)
 
         return Evaluation(misfit + self.lam * reg, misfit, reg, grad_fn=grad,
                           forward_jacobian=jf, regularizer_jacobian=jk)

@@ -41,18 +41,18 @@ def test_the_shared_inner_factor_is_evaluated_once_and_the_derivatives_are_the_c
     f, k = a @ inner.op, b @ inner.op
     x, v = RNG.standard_normal(5), RNG.standard_normal(5)
     wf, wk = RNG.standard_normal(7), RNG.standard_normal(3)
-    separate = (f.vjp(x, wf) + k.vjp(x, wk), f.jvp(x, v), k.jvp(x, v), f(x), k(x))
+    separate = (2.0 * f.vjp(x, wf) + 0.3 * k.vjp(x, wk), f.jvp(x, v), k.jvp(x, v), f(x), k(x))
 
     inner.calls = 0
     (jf, jk), pull = op.linearize_together([f, k], x)
-    gradient = pull([wf, wk])
+    gradient = pull([wf, wk], [2.0, 0.3])
     assert inner.calls == 1  # once for both values and the pullback of both terms
     np.testing.assert_allclose(gradient, separate[0], rtol=1e-12)
     np.testing.assert_allclose(jf @ v, separate[1], rtol=1e-12)
     np.testing.assert_allclose(jk @ v, separate[2], rtol=1e-12)
     np.testing.assert_allclose(jf.value, separate[3], rtol=1e-12)
     np.testing.assert_allclose(jk.value, separate[4], rtol=1e-12)
-    np.testing.assert_allclose(pull([wf, None]), f.vjp(x, wf), rtol=1e-12)
+    np.testing.assert_allclose(pull([wf, None], [0.5, 1.0]), 0.5 * f.vjp(x, wf), rtol=1e-12)
     assert op.dottest(jf).passed and op.dottest(jk).passed
 
 
@@ -64,9 +64,21 @@ def test_operators_without_a_common_factor_are_linearized_each_on_its_own():
     expected = f.vjp(x, wf) + k.vjp(x, wk)
     first.calls = second.calls = 0
     (jf, jk), pull = op.linearize_together([f, k], x)
-    np.testing.assert_allclose(pull([wf, wk]), expected, rtol=1e-12)
+    np.testing.assert_allclose(pull([wf, wk], [1.0, 1.0]), expected, rtol=1e-12)
     assert first.calls == second.calls == 1
     np.testing.assert_allclose(jf.value, f(x), rtol=1e-12)
+
+
+def test_a_single_operator_is_linearized_whole(monkeypatch):
+    inner = CountingInner()
+    a, _ = outer_maps()
+    f = a @ inner.op
+    whole, calls = f.linearize, []
+    monkeypatch.setattr(f, "linearize", lambda x: calls.append(x) or whole(x))
+    x = RNG.standard_normal(5)
+    (jf,), _ = op.linearize_together([f], x)
+    assert len(calls) == 1
+    np.testing.assert_array_equal(jf.value, whole(x).value)
 
 
 @pytest.mark.parametrize("lam", [0.0, 0.7])
@@ -88,3 +100,22 @@ def test_a_problem_with_data_and_regularizer_after_one_inner_map_evaluates_it_on
     assert inner.calls == 1
     assert evaluation.misfit == pytest.approx(float(residual @ residual), rel=1e-12)
     np.testing.assert_allclose(gradient, expected, rtol=1e-12, atol=1e-14)
+
+
+@pytest.mark.parametrize("regularized", [False, True])
+def test_a_problem_whose_maps_share_nothing_keeps_the_gradient_of_its_terms_to_the_bit(
+        regularized):
+    """Without a shared factor (a voxel grid's problem, or no regularizer) the gradient is
+    2 J_Fᵀ r + λ J_Kᵀ ∇g computed term by term, in that order."""
+    first, second = CountingInner(), CountingInner()
+    a, b = outer_maps()
+    data = RNG.standard_normal(7)
+    regularizer = solvers.Regularizer(op.SquaredL2(), b @ second.op) if regularized else None
+    problem = solvers.Problem(a @ first.op, data, regularizer=regularizer, lam=0.7)
+    x = RNG.standard_normal(5)
+    expected = 2.0 * problem.forward.linearize(x).adjoint(problem.forward(x) - data)
+    if regularized:
+        k = problem.regularizer.op
+        expected = expected + 0.7 * k.linearize(x).adjoint(
+            problem.regularizer.functional.grad(k(x)))
+    np.testing.assert_array_equal(problem.evaluate(x).grad, expected)
