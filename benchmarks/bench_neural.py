@@ -15,23 +15,24 @@ epoch is one pass over all rays, forward and backward:
   (network at all voxel centres, once for the data and the regularizer; voxel forward map,
   its VJP; the network's VJP).
 
-Compilation runs first (one warm-up iteration or evaluation) and is not timed. Times are wall
-clock and CPU time of the process (all threads; steadier than wall time on a shared machine);
-compare them only as ratios within one run. The breakdown times the stages of the neural
-field's first batch one after the other (sampling with the coarse network, fine network,
-emission kernel on both sample sets, kernel VJP, networks' backward, regularizer), the second
-time they run: the first call took twice as long (1.10 against 0.55 s for the batch at 32 + 32
-samples per ray). Peak
-resident memory is read after the neural-field epoch, before the voxel epoch runs. The paper
-reports 479–493 ms per epoch and 65–66 MB on a GPU for its neural field (Tricard, Chen & Deng
-2026, Table 1). The C allocator is set as the ``invflame`` command sets it (glibc's defaults
-with ``--default-allocator``; ``benchmarks/allocator.py``).
+Compilation runs first (one untimed epoch of each) and is not timed; each epoch is timed
+``--repeats`` times, the best taken. Times are wall clock and CPU time of the process (all
+threads; steadier than wall time on a shared machine); compare them only as ratios within one
+run. The breakdown times the stages of the neural field's first batch one after the other
+(sampling with the coarse network, fine network, emission kernel on both sample sets, kernel
+VJP, networks' backward, regularizer), the second time they run: the first call took twice as
+long (1.10 against 0.55 s for the batch at 32 + 32 samples per ray). Peak resident memory is
+read after the neural-field epochs, before the voxel epochs run. The paper reports 479–493 ms
+per epoch and 65–66 MB on a GPU for its neural field (Tricard, Chen & Deng 2026, Table 1). The
+C allocator is set as the ``invflame`` command sets it (glibc's defaults with
+``--default-allocator``; ``benchmarks/allocator.py``).
 
     python benchmarks/bench_neural.py [--rays-per-pixel 9] [--batches N] [--centres]
         [--default-allocator]
 """
 
 import argparse
+import itertools
 import resource
 import time
 from functools import partial
@@ -87,17 +88,19 @@ def voxel_epoch(scene, data, truth, repeats: int) -> np.ndarray:
     return timed(lambda: problem.evaluate(problem.x0).grad, repeats)
 
 
-def neural_epoch(rep, data, n_batches: int) -> np.ndarray:
-    """Wall and CPU seconds of an epoch of stochastic iterations (``n_batches`` of them timed,
-    scaled to the epoch)."""
+def neural_epoch(rep, data, n_batches: int, repeats: int) -> np.ndarray:
+    """Wall and CPU seconds of an epoch of stochastic iterations, best of ``repeats`` (of each,
+    ``n_batches`` iterations timed and scaled to the epoch; consecutive iterations throughout,
+    so each repeat trains on other batches)."""
     problem = rep.problem(data, "tikhonov", x0=rep.initial_parameters())
-    step = problem.value_and_grad
-    theta = problem.x0
-    step(theta, 0, np.random.default_rng(0))
-    clock = Clock()
-    for k in range(n_batches):
-        clock("batch", step, theta, k + 1, np.random.default_rng(k + 1))
-    return clock.seconds["batch"] * rep.iterations_per_epoch / n_batches
+    iterations = itertools.count()
+
+    def batches():
+        for _ in range(n_batches):
+            k = next(iterations)
+            problem.value_and_grad(problem.x0, k, np.random.default_rng(k))
+
+    return timed(batches, repeats) * rep.iterations_per_epoch / n_batches
 
 
 def neural_stages(rep, data) -> dict:
@@ -158,7 +161,7 @@ def main():
                         help="time only this many batches and scale to an epoch "
                              "(default: the whole epoch)")
     parser.add_argument("--repeats", type=int, default=1,
-                        help="timed voxel (and neural-centres) epochs, best taken")
+                        help="timed epochs of each representation, best taken")
     parser.add_argument("--centres", action="store_true",
                         help="also time the neural-centres representation")
     add_argument(parser)
@@ -177,7 +180,7 @@ def main():
     renderer = rep.renderer
     n_batches = rep.iterations_per_epoch
     timed_batches = n_batches if args.batches is None else min(args.batches, n_batches)
-    neural = neural_epoch(rep, data, timed_batches)
+    neural = neural_epoch(rep, data, timed_batches, args.repeats)
     neural_peak = peak_rss_mb()
     neural_stages(rep, data)  # a first call takes up to twice as long: not timed
     stages = neural_stages(rep, data)
@@ -191,12 +194,13 @@ def main():
           f"({renderer.n_coarse} + {renderer.n_coarse + renderer.n_fine} kernel segments), "
           f"{renderer.batch_rays} pixels per batch in calls of {renderer.chunk_rays}, "
           f"{rep.batch_centres} centres per batch")
-    print(f"  epoch ({n_batches} batches, {timed_batches} timed): {seconds(neural)}   "
+    print(f"  epoch ({n_batches} batches, {timed_batches} timed, best of {args.repeats}): "
+          f"{seconds(neural)}   "
           f"[paper, GPU: {PAPER_MS}]")
     print(f"  neural / voxel epoch: {neural[0] / voxel[0]:.2f} wall, "
           f"{neural[1] / voxel[1]:.2f} CPU; kernel segments per epoch "
           f"{samples / segments:.2f}x the voxel map's")
-    print(f"  peak resident memory after the neural epoch: {neural_peak:.0f} MB")
+    print(f"  peak resident memory after the neural epochs: {neural_peak:.0f} MB")
     print(f"  parameter memory: {rep.parameter_bytes(rep.initial_parameters()) / 1e6:.3f} MB"
           f"   [paper, GPU memory: {PAPER_MB}]")
     total = sum(stages.values())
