@@ -79,10 +79,15 @@ class Composition(Operator):
         r"""Both parts linearized once: :math:`J = J_\text{outer}(\text{inner}(x))\,
         J_\text{inner}(x)`."""
         x = self._as_input(x)
-        j_inner = self.inner.linearize(x)
-        j_outer = self.outer.linearize(self._mid(j_inner.value))
-        return _jacobian_from(self, x, j_outer.value,
-                              _linear_if_possible(Composition(j_outer, j_inner)))
+        return _linearize_after(self, x, self.outer, self.inner.linearize(x))[1]
+
+
+def _linearize_after(op: Operator, x, outer: Operator, j_inner: Jacobian):
+    """``(J_outer, J_op)`` at ``x`` for ``op`` = ``outer`` after an inner map whose Jacobian
+    at ``x`` (with its value) is ``j_inner``: the outer linearized at the inner's value."""
+    j_outer = outer.linearize(np.reshape(j_inner.value, outer.dims))
+    return j_outer, _jacobian_from(op, x, j_outer.value,
+                                   _linear_if_possible(Composition(j_outer, j_inner)))
 
 
 def _factors(op: Operator) -> list[Operator]:
@@ -140,19 +145,18 @@ def linearize_together(ops: Sequence[Operator], x):
         return jacobians, lambda ws, scales: sum(
             c * np.reshape(j.adjoint(w), ops[0].dims)
             for j, w, c in zip(jacobians, ws, scales, strict=True) if w is not None)
+    x = ops[0]._as_input(x)
     inner = _compose(chains[0][-shared:])
     j_inner = inner.linearize(x)
-    outers = [_compose(c[:-shared]) for c in chains]
-    j_outers = [o.linearize(np.reshape(j_inner.value, o.dims)) for o in outers]
-    jacobians = [_jacobian_from(op, x, j.value, _linear_if_possible(Composition(j, j_inner)))
-                 for op, j in zip(ops, j_outers, strict=True)]
+    j_outers, jacobians = zip(*(_linearize_after(op, x, _compose(c[:-shared]), j_inner)
+                                for op, c in zip(ops, chains, strict=True)), strict=True)
 
     def pull(ws, scales):
         w_inner = sum(c * np.reshape(j.adjoint(w), inner.dimsd)
                       for j, w, c in zip(j_outers, ws, scales, strict=True) if w is not None)
         return np.reshape(j_inner.adjoint(w_inner), ops[0].dims)
 
-    return jacobians, pull
+    return list(jacobians), pull
 
 
 class _Combination(Operator):
