@@ -5,6 +5,7 @@ import pytest
 import torch
 
 from invflame.geometry import VoxelGrid
+from invflame.representations.neural import network as network_module
 from invflame.representations.neural.network import (
     AMBIENT_START,
     FieldNetwork,
@@ -27,6 +28,23 @@ def test_outputs_have_field_shape_and_stay_in_range_for_any_weights():
     assert torch.all((out[0] >= 250.0) & (out[0] <= 2500.0))
     assert torch.all((out[1:] >= 0.0) & (out[1:] <= 1.0))
     assert out[0].max() - out[0].min() > 100.0  # the range is used, not a constant
+
+
+def test_points_run_in_passes_give_the_values_and_derivatives_of_one_pass(monkeypatch):
+    network = FieldNetwork(GRID, seed=2, dtype=torch.float64)
+    points = torch.tensor(np.random.default_rng(4).uniform(0.0, 1.0, (5, 9, 3)))
+    theta = torch.tensor(network.parameter_vector())
+    tangent, cotangent = torch.randn_like(theta), torch.randn(4, 5, 9, dtype=torch.float64)
+
+    def value_and_products():
+        fun = lambda t: network.evaluate(t, points)  # noqa: E731
+        value, pull = torch.func.vjp(fun, theta)
+        return value, torch.func.jvp(fun, (theta,), (tangent,))[1], pull(cotangent)[0]
+
+    whole = value_and_products()
+    monkeypatch.setattr(network_module, "POINTS_PER_PASS", 7)  # 45 points: 7 passes
+    for passes, one in zip(value_and_products(), whole, strict=True):
+        torch.testing.assert_close(passes, one, rtol=1e-13, atol=1e-13)
 
 
 def test_untrained_network_starts_near_ambient():
