@@ -26,7 +26,7 @@ from operators.base import Jacobian, LinearOperator, Operator, _size, register
 
 def _jacobian_from(op: Operator, x, value, derivative: LinearOperator) -> Jacobian:
     """The Jacobian of ``op`` at ``x`` applied through an already assembled linear map."""
-    return Jacobian(op, x, value, jvp=derivative, vjp=derivative.adjoint)
+    return Jacobian(op, x, value, derivative=derivative)
 
 
 def _push(op: Operator, x, v):
@@ -91,11 +91,20 @@ def _linearize_after(op: Operator, x, outer: Operator, j_inner: Jacobian):
 
 
 def _factors(op: Operator) -> list[Operator]:
-    """The factors of a chain of compositions, outermost first (``[op]`` if it is none)."""
-    if isinstance(op, _LinearView) and isinstance(op.combination, Composition):
-        op = op.combination
-    if isinstance(op, Composition):
-        return _factors(op.outer) + _factors(op.inner)
+    """The factors of a chain of compositions, outermost first (``[op]`` if it is none).
+
+    A Jacobian assembled from others is seen as its ``derivative``, and ``c * (A @ B)`` as
+    ``(c * A) @ B``.
+    """
+    if isinstance(op, Jacobian) and op.derivative is not None and op.derivative is not op:
+        factors = _factors(op.derivative)
+        return factors if len(factors) > 1 else [op]
+    combination = op.combination if isinstance(op, _LinearView) else op
+    if isinstance(combination, Composition):
+        return _factors(combination.outer) + _factors(combination.inner)
+    if isinstance(combination, Scaled):
+        outermost, *rest = _factors(combination.parts[0])
+        return [combination.scale * outermost, *rest] if rest else [op]
     return [op]
 
 
@@ -107,13 +116,40 @@ def _compose(factors: Sequence[Operator]) -> Operator:
     return out
 
 
+def _common_factor(ops: Sequence[Operator]):
+    r"""Operators on one input split as :math:`F_i = A_i \circ P` with :math:`P` the innermost
+    factors they all end in (the same objects, :func:`_factors`), each :math:`A_i` keeping
+    at least one factor of its own.
+
+    Parameters
+    ----------
+    ops : sequence of Operator
+        Two or more operators with the same input shape.
+
+    Returns
+    -------
+    tuple of (list of Operator, Operator), or None
+        ``(outers, inner)``: ``ops[i]`` is ``outers[i] @ inner``; None when they share no
+        factor (or there is one operator).
+    """
+    chains = [_factors(op) for op in ops]
+    shared = 0
+    while (len(ops) > 1 and shared < min(len(c) for c in chains) - 1
+           and all(c[-1 - shared] is chains[0][-1 - shared] for c in chains)):
+        shared += 1
+    if shared == 0:
+        return None
+    return [_compose(c[:-shared]) for c in chains], _compose(chains[0][-shared:])
+
+
 def linearize_together(ops: Sequence[Operator], x):
     r"""Operators on one input linearized at ``x``, their common innermost factors once.
 
     When every operator of ``ops`` is a chain of compositions ending in the same factors
     :math:`P` (the same objects: :math:`F_i = A_i \circ P`, e.g. a data map and a regularizer
-    after one reparameterization), :math:`P` is evaluated and linearized once, and a sum of
-    the operators' pullbacks passes through :math:`J_P^\mathsf{T}` once:
+    after one reparameterization), :math:`P` is evaluated and
+    linearized once, and a sum of the operators' pullbacks passes through
+    :math:`J_P^\mathsf{T}` once:
     :math:`\sum_i J_{F_i}^\mathsf{T} w_i = J_P^\mathsf{T} \sum_i J_{A_i}^\mathsf{T} w_i`.
     Otherwise each operator is linearized on its own.
 
@@ -127,7 +163,9 @@ def linearize_together(ops: Sequence[Operator], x):
     Returns
     -------
     jacobians : list of Jacobian
-        :math:`J_{F_i}(x)`, each with its ``.value`` :math:`F_i(x)`.
+        :math:`J_{F_i}(x)`, each with its ``.value`` :math:`F_i(x)`; those of operators with
+        common factors are :math:`J_{A_i} J_P` with the one :math:`J_P`, so a
+        :class:`~operators.combinators.VStack` of them applies :math:`J_P` once too.
     pull : callable
         ``pull(ws, scales)`` is :math:`\sum_i c_i J_{F_i}(x)^\mathsf{T} w_i` for cotangents
         ``ws`` shaped as the operators' outputs (None for a term left out) and real scales
@@ -135,21 +173,17 @@ def linearize_together(ops: Sequence[Operator], x):
         the shared factors: before :math:`J_P^\mathsf{T}`), as a caller computing the terms one
         by one would.
     """
-    chains = [_factors(op) for op in ops]
-    shared = 0
-    while (len(ops) > 1 and shared < min(len(c) for c in chains) - 1
-           and all(c[-1 - shared] is chains[0][-1 - shared] for c in chains)):
-        shared += 1
-    if shared == 0:
+    split = _common_factor(ops)
+    if split is None:
         jacobians = [op.linearize(x) for op in ops]
         return jacobians, lambda ws, scales: sum(
             c * np.reshape(j.adjoint(w), ops[0].dims)
             for j, w, c in zip(jacobians, ws, scales, strict=True) if w is not None)
+    outers, inner = split
     x = ops[0]._as_input(x)
-    inner = _compose(chains[0][-shared:])
     j_inner = inner.linearize(x)
-    j_outers, jacobians = zip(*(_linearize_after(op, x, _compose(c[:-shared]), j_inner)
-                                for op, c in zip(ops, chains, strict=True)), strict=True)
+    j_outers, jacobians = zip(*(_linearize_after(op, x, outer, j_inner)
+                                for op, outer in zip(ops, outers, strict=True)), strict=True)
 
     def pull(ws, scales):
         w_inner = sum(c * np.reshape(j.adjoint(w), inner.dimsd)

@@ -325,7 +325,7 @@ class LinearOperator(Operator, pylops.LinearOperator):
     def linearize(self, x) -> Jacobian:
         """The operator itself as its Jacobian at ``x``, with ``.value`` :math:`= A x`."""
         x = self._as_input(x)
-        return Jacobian(self, x, self(x), jvp=self, vjp=self.adjoint)
+        return Jacobian(self, x, self(x), derivative=self)
 
     def _matvec(self, x):
         return self(np.reshape(x, self.dims)).ravel()
@@ -379,15 +379,24 @@ class Jacobian(LinearOperator):
     value : ndarray, optional
         :math:`F(x)` if already known (kept as ``.value``).
     jvp, vjp : callable, optional
-        ``v -> J v`` and ``w -> Jᵀ w`` on arrays shaped ``dims``/``dimsd`` (e.g. a linear
-        operator and its ``adjoint``); default to ``op.jvp(x, ·)`` and ``op.vjp(x, ·)``.
+        ``v -> J v`` and ``w -> Jᵀ w`` on arrays shaped ``dims``/``dimsd``; default to
+        ``op.jvp(x, ·)`` and ``op.vjp(x, ·)``, or to ``derivative`` and its adjoint.
+    derivative : LinearOperator, optional
+        The Jacobian as an assembled linear operator (e.g. the chain-rule composition of the
+        parts' Jacobians), kept as ``.derivative``: a stack of Jacobians that end in the same
+        factors applies those once (:class:`~operators.combinators.VStack`).
     """
 
-    def __init__(self, op: Operator, x, value=None, jvp=None, vjp=None):
+    def __init__(self, op: Operator, x, value=None, jvp=None, vjp=None,
+                 derivative: LinearOperator | None = None):
         super().__init__(op.dims, op.dimsd, dtype=op.dtype, name=f"J[{op.name}]")
         self.op = op
         self.x = x
         self.value = value
+        self.derivative = derivative
+        if derivative is not None:
+            jvp = derivative if jvp is None else jvp
+            vjp = derivative.adjoint if vjp is None else vjp
         self._apply_jvp = (lambda v: op.jvp(x, v)) if jvp is None else jvp
         self._apply_vjp = (lambda w: op.vjp(x, w)) if vjp is None else vjp
 

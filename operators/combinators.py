@@ -2,7 +2,8 @@
 of one input (:func:`block_diag`), with the chain rule of :mod:`operators.algebra`.
 
 Each is linear (a :class:`operators.base.LinearOperator`) when all its blocks are, and
-linearizes each block once per point.
+linearizes each block once per point. A stack of linear blocks that end in the same factors
+applies those once.
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from operators.algebra import _Combination, _linear_if_possible
+from operators.algebra import _Combination, _common_factor, _linear_if_possible
 from operators.base import Operator, _size
 
 
@@ -48,6 +49,12 @@ class VStack(_Combination):
 
     The output has shape ``(n, *dimsd)`` when all blocks share ``dimsd``, else it is the flat
     concatenation of the blocks' outputs (:meth:`split` and :meth:`join` convert).
+
+    Linear blocks that end in the same factors :math:`P` (the same objects:
+    :math:`A_i = B_i P`, e.g. the Jacobians of a data map and a regularizer after one
+    reparameterization, from :func:`operators.linearize_together`) apply :math:`P` once:
+    :math:`x \mapsto (B_1 P x, \dots, B_n P x)`, and the adjoint
+    :math:`P^\mathsf{T} \sum_i B_i^\mathsf{T} y_i`.
     """
 
     def __init__(self, ops: Sequence[Operator], name: str | None = None):
@@ -59,6 +66,7 @@ class VStack(_Combination):
                          dtype=np.result_type(*[op.dtype for op in ops]),
                          name=name or "VStack[" + ", ".join(op.name for op in ops) + "]")
         self.parts = tuple(ops)
+        self._factored = _common_factor(ops) if all(op.linear for op in ops) else None
 
     def split(self, y) -> list[np.ndarray]:
         """An output of the stack as its blocks, each shaped like its operator's ``dimsd``."""
@@ -71,6 +79,24 @@ class VStack(_Combination):
 
     def _rebuild(self, parts):
         return VStack(parts, name=self.name)
+
+    def _forward(self, x):
+        if self._factored is None:
+            return super()._forward(x)
+        outers, inner = self._factored
+        y = inner(np.reshape(x, inner.dims))
+        return self._assemble([outer(np.reshape(y, outer.dims)) for outer in outers])
+
+    def _jvp(self, x, v):
+        return super()._jvp(x, v) if self._factored is None else self._forward(v)
+
+    def _vjp(self, x, w):
+        if self._factored is None:
+            return super()._vjp(x, w)
+        outers, inner = self._factored
+        w_inner = sum(np.reshape(outer.adjoint(wi), inner.dimsd)
+                      for outer, wi in zip(outers, self._cotangents(w), strict=True))
+        return np.reshape(inner.adjoint(w_inner), self.dims)
 
     def _assemble(self, outputs):
         return _join(outputs, self.dimsd)

@@ -119,3 +119,70 @@ def test_a_problem_whose_maps_share_nothing_keeps_the_gradient_of_its_terms_to_t
         expected = expected + 0.7 * k.linearize(x).adjoint(
             problem.regularizer.functional.grad(k(x)))
     np.testing.assert_array_equal(problem.evaluate(x).grad, expected)
+
+
+class CountingMatrix(op.LinearOperator):
+    """A matrix (5,) -> (8,) that counts its products and adjoint products."""
+
+    def __init__(self):
+        super().__init__((5,), (8,), name="P")
+        self.products = self.adjoints = 0
+
+    def _forward(self, x):
+        self.products += 1
+        return W @ x
+
+    def _adjoint(self, y):
+        self.adjoints += 1
+        return W.T @ y
+
+
+def test_a_stack_of_linear_blocks_after_one_factor_applies_it_once():
+    inner = CountingMatrix()
+    a, b = matrix((7, 8), "A"), matrix((3, 8), "B")
+    d = RNG.uniform(1, 2, 8)
+    blocks = [a @ inner, 0.5 * (b @ op.Diagonal(d) @ inner)]
+    stack = op.vstack(blocks)
+    x, y = RNG.standard_normal(5), RNG.standard_normal(10)
+    expected = np.concatenate([a @ (W @ x), 0.5 * (b @ (d * (W @ x)))])
+
+    inner.products = inner.adjoints = 0
+    np.testing.assert_allclose(stack @ x, expected, rtol=1e-12)
+    transposed = stack.adjoint(y)
+    assert (inner.products, inner.adjoints) == (1, 1)
+    np.testing.assert_allclose(transposed, blocks[0].adjoint(y[:7]) + blocks[1].adjoint(y[7:]),
+                               rtol=1e-12)
+    assert op.dottest(stack).passed
+
+
+def test_a_stack_of_blocks_without_a_common_factor_applies_each_block():
+    first, second = CountingMatrix(), CountingMatrix()
+    stack = op.vstack([matrix((7, 8), "A") @ first, matrix((3, 8), "B") @ second])
+    stack @ RNG.standard_normal(5)
+    stack.adjoint(RNG.standard_normal(10))
+    assert (first.products, first.adjoints, second.products, second.adjoints) == (1, 1, 1, 1)
+
+
+def test_the_gauss_newton_stack_of_maps_after_one_inner_map_linearizes_it_once_per_product():
+    """Solvers stack the Jacobians of one evaluation (solvers.gauss_newton.stacked_jacobian):
+    the inner map's Jacobian-vector product runs once per product of the stack."""
+    from solvers.gauss_newton import stacked_jacobian
+
+    inner = CountingInner()
+    a, b = outer_maps()
+    problem = solvers.Problem(a @ inner.op, RNG.standard_normal(7),
+                              regularizer=solvers.Regularizer(op.SquaredL2(), b @ inner.op),
+                              lam=0.7)
+    x, v, y = RNG.standard_normal(5), RNG.standard_normal(5), RNG.standard_normal(10)
+    stack, _ = stacked_jacobian(problem, problem.evaluate(x))
+    f, k = problem.forward, problem.regularizer.op
+    weight = np.sqrt(0.7 * problem.regularizer.functional.scale)
+
+    inner.calls = 0
+    product = stack @ v
+    assert inner.calls == 1  # torch's forward-mode product runs the map once
+    np.testing.assert_allclose(product, np.concatenate([f.jvp(x, v), weight * k.jvp(x, v)]),
+                               rtol=1e-12)
+    np.testing.assert_allclose(stack.adjoint(y), f.vjp(x, y[:7]) + weight * k.vjp(x, y[7:]),
+                               rtol=1e-12)
+    assert op.dottest(stack).passed
