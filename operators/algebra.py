@@ -96,7 +96,7 @@ def _factors(op: Operator) -> list[Operator]:
     A Jacobian assembled from others is seen as its ``derivative``, and ``c * (A @ B)`` as
     ``(c * A) @ B``.
     """
-    if isinstance(op, Jacobian) and op.derivative is not None and op.derivative is not op:
+    if isinstance(op, Jacobian) and op.derivative is not None:
         factors = _factors(op.derivative)
         return factors if len(factors) > 1 else [op]
     combination = op.combination if isinstance(op, _LinearView) else op
@@ -132,10 +132,12 @@ def _common_factor(ops: Sequence[Operator]):
         ``(outers, inner)``: ``ops[i]`` is ``outers[i] @ inner``; None when they share no
         factor (or there is one operator).
     """
+    if len(ops) < 2:
+        return None
     chains = [_factors(op) for op in ops]
+    most = min(len(c) for c in chains) - 1
     shared = 0
-    while (len(ops) > 1 and shared < min(len(c) for c in chains) - 1
-           and all(c[-1 - shared] is chains[0][-1 - shared] for c in chains)):
+    while shared < most and all(c[-1 - shared] is chains[0][-1 - shared] for c in chains):
         shared += 1
     if shared == 0:
         return None
