@@ -8,9 +8,12 @@ the tangents of the optical depth, the reverse sweep the running sums :math:`I_{
 several consumers and writes each intermediate spectrum of a ray batch to memory; here one ray
 is swept at a time, camera side first, its spectra (a few KiB each) stay in the core's cache,
 and each table row is read once per segment. Rays run in parallel over the CPU's cores
-(``numba.prange``), longest first.
+(``numba.prange``), longest first. The forward and forward-mode sweeps take two consecutive
+segments of a ray that lie in the same temperature interval (most do) in one pass, their table
+rows and running spectra read once for both; the reverse sweep, which holds ``n_tau + 1`` sums
+per segment, takes one at a time (two were slower in a trial).
 
-Each segment is one pass over wavenumber: every gas's row of the optical depth, its offset
+Each segment (or pair) is one pass over wavenumber: every gas's row of the optical depth, its offset
 derivative, the Planck spline, the transmission and the running sums, held in registers from
 one to the next. For that the compiler needs the gases written out one by one (a loop over a
 count known only at run time, inside the loop over wavenumber, is not vectorized: 8 × slower
@@ -57,6 +60,16 @@ def _float32_from_bits(typingctx, bits):
     return types.float32(types.int32), codegen
 
 
+@intrinsic
+def _select(typingctx, condition, if_true, if_false):
+    """``if_true`` where ``condition`` holds, else ``if_false`` (float32): one LLVM select,
+    without the branch a conditional expression would put in Numba's IR (which, inlined into
+    one loop more than once, leaves phi nodes Numba's SSA check warns of)."""
+    def codegen(context, builder, signature, args):
+        return builder.select(*args)
+    return types.float32(types.boolean, types.float32, types.float32), codegen
+
+
 @numba.njit(fastmath=True, inline="always")
 def _expm1_parts(x):
     r""":math:`e^{-x} = (1 + m)\,2^k` in float32 for :math:`x \ge 0`: ``(m, k, 2**k)``, with
@@ -98,7 +111,7 @@ def _transmission_for(tau):
         # the absorptance -m where k = 0 (a select, which no reassociation undoes), else 1 - t
         m, k, scale = _expm1_parts(tau)
         t = (m + np.float32(1.0)) * scale
-        return t, -m if k == np.float32(0.0) else np.float32(1.0) - t
+        return t, _select(k == np.float32(0.0), -m, np.float32(1.0) - t)
     return float32
 
 
@@ -122,33 +135,61 @@ import numpy as np
 from operators.rte_sweep_cpu import _cubic, _slope, _transmission
 
 
+@numba.njit(fastmath=True, inline="always")
+def forward_step(c, j, u, {a_}through, partial):
+    zero = c.dtype.type(0)
+    {rows}
+    t, absorptance = _transmission({tau})
+    return through * t, partial + _cubic(c, {planck_row}, j, u) * through * absorptance
+
+
 @numba.njit(fastmath=True, parallel=True, cache=True)
 def forward(coef, index, amount, offset, n_segments, background, order):
     n_rays, n_eta = amount.shape[0], coef.shape[2]
-    zero = coef.dtype.type(0)
     radiance = np.empty((n_rays, n_eta), coef.dtype)
     for q in numba.prange(n_rays):
         i = order[q]
         partial_sum = np.zeros(n_eta, coef.dtype)
         through = np.ones(n_eta, coef.dtype)
-        for k in range(n_segments[i]):
+        k = 0
+        while k < n_segments[i]:
             c, u = coef[index[i, k]], offset[i, k]
             {amounts}
-            for j in range(n_eta):
-                {rows}
-                t, absorptance = _transmission({tau})
-                partial_sum[j] += _cubic(c, {planck_row}, j, u) * through[j] * absorptance
-                through[j] *= t
+            if k + 1 < n_segments[i] and index[i, k + 1] == index[i, k]:
+                v = offset[i, k + 1]
+                {amounts_next}
+                for j in range(n_eta):
+                    th, ps = forward_step(c, j, u, {a_}through[j], partial_sum[j])
+                    through[j], partial_sum[j] = forward_step(c, j, v, {b_}th, ps)
+                k += 2
+            else:
+                for j in range(n_eta):
+                    through[j], partial_sum[j] = forward_step(c, j, u, {a_}through[j],
+                                                              partial_sum[j])
+                k += 1
         for j in range(n_eta):
             radiance[i, j] = partial_sum[j] + through[j] * background[i, j]
     return radiance
+
+
+@numba.njit(fastmath=True, inline="always")
+def forward_mode_step(c, j, u, du, {a_}{da_}through, partial, d_sum, depth):
+    zero = c.dtype.type(0)
+    {rows}
+    tau_u = {tau_u}
+    d_tau = {d_tau}
+    emission = _cubic(c, {planck_row}, j, u)
+    t, absorptance = _transmission({tau})
+    seen = through * absorptance
+    d_sum += (seen * (du * _slope(c, {planck_row}, j, u) - emission * depth)
+              + through * t * emission * d_tau)
+    return through * t, partial + emission * seen, d_sum, depth + d_tau
 
 
 @numba.njit(fastmath=True, parallel=True, cache=True)
 def forward_mode(coef, index, amount, offset, n_segments, background, d_amount, d_offset,
                  d_background, order):
     n_rays, n_eta = amount.shape[0], coef.shape[2]
-    zero = coef.dtype.type(0)
     radiance = np.empty((n_rays, n_eta), coef.dtype)
     d_radiance = np.empty((n_rays, n_eta), coef.dtype)
     for q in numba.prange(n_rays):
@@ -157,27 +198,46 @@ def forward_mode(coef, index, amount, offset, n_segments, background, d_amount, 
         d_sum = np.zeros(n_eta, coef.dtype)
         through = np.ones(n_eta, coef.dtype)
         depth = np.zeros(n_eta, coef.dtype)  # tangent of the optical depth in front
-        for k in range(n_segments[i]):
+        k = 0
+        while k < n_segments[i]:
             c, u, du = coef[index[i, k]], offset[i, k], d_offset[i, k]
             {amounts}
             {d_amounts}
-            for j in range(n_eta):
-                {rows}
-                tau_u = {tau_u}
-                d_tau = {d_tau}
-                emission = _cubic(c, {planck_row}, j, u)
-                t, absorptance = _transmission({tau})
-                seen = through[j] * absorptance
-                d_sum[j] += (seen * (du * _slope(c, {planck_row}, j, u) - emission * depth[j])
-                             + through[j] * t * emission * d_tau)
-                partial_sum[j] += emission * seen
-                depth[j] += d_tau
-                through[j] *= t
+            if k + 1 < n_segments[i] and index[i, k + 1] == index[i, k]:
+                v, dv = offset[i, k + 1], d_offset[i, k + 1]
+                {amounts_next}
+                {d_amounts_next}
+                for j in range(n_eta):
+                    th, ps, ds, dp = forward_mode_step(c, j, u, du, {a_}{da_}through[j],
+                                                       partial_sum[j], d_sum[j], depth[j])
+                    through[j], partial_sum[j], d_sum[j], depth[j] = forward_mode_step(
+                        c, j, v, dv, {b_}{db_}th, ps, ds, dp)
+                k += 2
+            else:
+                for j in range(n_eta):
+                    through[j], partial_sum[j], d_sum[j], depth[j] = forward_mode_step(
+                        c, j, u, du, {a_}{da_}through[j], partial_sum[j], d_sum[j], depth[j])
+                k += 1
         for j in range(n_eta):
             radiance[i, j] = partial_sum[j] + through[j] * background[i, j]
             d_radiance[i, j] = d_sum[j] + through[j] * (d_background[i, j]
                                                         - depth[j] * background[i, j])
     return radiance, d_radiance
+
+
+@numba.njit(fastmath=True, inline="always")
+def reverse_step(c, j, u, {a_}through, partial, radiance, cotangent, d_offset{_g}):
+    zero = c.dtype.type(0)
+    {rows}
+    tau_u = {tau_u}
+    emission = _cubic(c, {planck_row}, j, u)
+    t, absorptance = _transmission({tau})
+    absorbed = through * absorptance
+    partial += emission * absorbed
+    through *= t
+    g = cotangent * (through * emission - (radiance - partial))
+    d_offset += g * tau_u + cotangent * absorbed * _slope(c, {planck_row}, j, u)
+    return through, partial, d_offset{_sums_add}
 
 
 @numba.njit(fastmath=True, parallel=True, cache=True)
@@ -194,35 +254,32 @@ def reverse(coef, index, amount, offset, n_segments, radiance, cotangent, with_t
         for k in range(n_segments[i]):
             c, u = coef[index[i, k]], offset[i, k]
             {amounts}
-            {sums_zero}
-            d_offset = zero
+            d_offset{_g} = zero{_zeros}
             for j in range(n_eta):
-                {rows}
-                tau_u = {tau_u}
-                emission = _cubic(c, {planck_row}, j, u)
-                t, absorptance = _transmission({tau})
-                absorbed = through[j] * absorptance
-                partial_sum[j] += emission * absorbed
-                through[j] *= t
-                g = cotangent[i, j] * (through[j] * emission - (radiance[i, j] - partial_sum[j]))
-                d_offset += g * tau_u + cotangent[i, j] * absorbed * _slope(c, {planck_row}, j, u)
-                {sums_add}
-            {sums_store}
-            d_weights[i, k, {n_tau}] = d_offset
+                through[j], partial_sum[j], d_offset{_g} = reverse_step(
+                    c, j, u, {a_}through[j], partial_sum[j], radiance[i, j], cotangent[i, j],
+                    d_offset{_g})
+            {store}
         if with_transmittance:
             transmittance[i] = through
     return d_weights, transmittance
 """
-"""The three sweeps as Python source; each ``{…}`` stands for a line or an expression written
-out gas by gas (:func:`_gas_code`), which :func:`_kernels` fills in for the tables' gases."""
+"""The three sweeps as Python source. Each sweeps a segment, or two consecutive segments in
+the same temperature interval (their table rows read once for both), in one pass over
+wavenumber, its step at one wavenumber an inlined function; each ``{…}`` stands for a line,
+an expression or names written out gas by gas (:func:`_gas_code`), which :func:`_kernels`
+fills in for the tables' gases."""
 
 
 def _gas_code(n_gas: int, n_tau: int) -> dict[str, str]:
-    """The lines of :data:`_KERNELS` that name each row of the optical depth: the gases'
-    cubic rows ``4 s … 4 s + 3`` of the table, then the soot's row (constant in ``u``)."""
+    """The parts of :data:`_KERNELS` that name each row of the optical depth: the gases'
+    cubic rows ``4 s … 4 s + 3`` of the table, then the soot's row (constant in ``u``), and
+    the amounts, their tangents and the sums over wavenumber of a segment (``a``, ``da``,
+    ``g``) and of the one after it (``b``, ``db``, ``h``)."""
     rows = [f"_cubic(c, {4 * s}, j, u)" for s in range(n_gas)] + [f"c[{4 * n_gas}, j]"] * (
         n_tau - n_gas)
-    r, a, da, g = ([f"{name}{s}" for s in range(n_tau)] for name in ("r", "a", "da", "g"))
+    r, a, b, da, db, g = ([f"{name}{s}" for s in range(n_tau)]
+                          for name in ("r", "a", "b", "da", "db", "g"))
 
     def assign(names, values):
         return f"{', '.join(names)} = {', '.join(values)}" if names else "pass"
@@ -230,17 +287,30 @@ def _gas_code(n_gas: int, n_tau: int) -> dict[str, str]:
     def total(terms):
         return " + ".join(terms) if terms else "zero"
 
+    def before(names):  # names, each followed by a comma: a list that goes on
+        return "".join(f"{name}, " for name in names)
+
+    def after(names):  # names, each after a comma: a list that went before
+        return "".join(f", {name}" for name in names)
+
+    def taken(names, segment):
+        return [f"{source}[i, {segment}, {s}]" for s, source in enumerate(names)]
+
     return {
         "planck_row": str(n_tau + 3 * n_gas),
-        "amounts": assign(a, [f"amount[i, k, {s}]" for s in range(n_tau)]),
-        "d_amounts": assign(da, [f"d_amount[i, k, {s}]" for s in range(n_tau)]),
+        "amounts": assign(a, taken(["amount"] * n_tau, "k")),
+        "amounts_next": assign(b, taken(["amount"] * n_tau, "k + 1")),
+        "d_amounts": assign(da, taken(["d_amount"] * n_tau, "k")),
+        "d_amounts_next": assign(db, taken(["d_amount"] * n_tau, "k + 1")),
+        "a_": before(a), "b_": before(b), "da_": before(da), "db_": before(db),
+        "_g": after(g),
+        "_zeros": after(["zero"] * n_tau),
         "rows": assign(r, rows),
         "tau": total([f"{a[s]} * {r[s]}" for s in range(n_tau)]),
         "tau_u": total([f"{a[s]} * _slope(c, {4 * s}, j, u)" for s in range(n_gas)]),
         "d_tau": total(["du * tau_u"] + [f"{da[s]} * {r[s]}" for s in range(n_tau)]),
-        "sums_zero": assign(g, ["zero"] * n_tau),
-        "sums_add": assign(g, [f"{g[s]} + g * {r[s]}" for s in range(n_tau)]),
-        "sums_store": assign([f"d_weights[i, k, {s}]" for s in range(n_tau)], g),
+        "_sums_add": after([f"{g[s]} + g * {r[s]}" for s in range(n_tau)]),
+        "store": assign(taken(["d_weights"] * (n_tau + 1), "k"), [*g, "d_offset"]),
     }
 
 

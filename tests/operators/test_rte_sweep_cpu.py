@@ -102,6 +102,21 @@ def assert_same_values(tables, fields, lengths, background, rtol):
     assert_same_gradients(ours[:1], ours[1:2], rtol)  # the JVP's value is the forward's
 
 
+@CASES
+def test_segments_in_one_temperature_interval_are_swept_as_the_xla_sweep_does(dtype, rtol):
+    # runs of one, two and three segments in the same interval of NODES (300, 700, 1200,
+    # 1800, 2500 K): the sweeps take two such segments in one pass, one alone
+    tables, fields, lengths, background = scene(dtype, False)
+    fields[0] = [400.0, 420.0, 1000.0, 1900.0, 1950.0, 2000.0, 800.0, 810.0, 820.0]
+    lengths[:] = lengths[0]  # no padding: every ray has the nine segments
+    interval = np.searchsorted(NODES, fields[0][0])
+    runs = np.diff(np.flatnonzero(np.diff(np.r_[-1, interval, -1])))
+    assert sorted(runs) == [1, 2, 3, 3]
+    xla = gradients(tables, fields, lengths, background, "xla")
+    assert_same_gradients(xla, gradients(tables, fields, lengths, background, "numba"), rtol)
+    assert_same_values(tables, fields, lengths, background, rtol)
+
+
 @pytest.mark.parametrize("zero_species", [(1, 2), ()], ids=["one gas", "three gases"])
 def test_numba_sweeps_written_out_for_one_and_three_gases_give_the_xla_results(zero_species):
     tables, fields, lengths, background = scene(np.float64, True, zero_species)
