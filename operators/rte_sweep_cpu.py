@@ -264,18 +264,19 @@ def reverse(coef, index, amount, offset, n_segments, radiance, cotangent, with_t
             transmittance[i] = through
     return d_weights, transmittance
 """
-"""The three sweeps as Python source. Each sweeps a segment, or two consecutive segments in
-the same temperature interval (their table rows read once for both), in one pass over
-wavenumber, its step at one wavenumber an inlined function; each ``{…}`` stands for a line,
-an expression or names written out gas by gas (:func:`_gas_code`), which :func:`_kernels`
-fills in for the tables' gases."""
+"""The three sweeps as Python source. The forward and forward-mode sweeps take a segment, or
+two consecutive segments in the same temperature interval (their table rows read once for
+both), in one pass over wavenumber, the reverse sweep one segment; each sweep's step at one
+wavenumber is an inlined function. Each ``{…}`` stands for a line, an expression or names
+written out gas by gas (:func:`_gas_code`), which :func:`_kernels` fills in for the tables'
+gases."""
 
 
 def _gas_code(n_gas: int, n_tau: int) -> dict[str, str]:
     """The parts of :data:`_KERNELS` that name each row of the optical depth: the gases'
-    cubic rows ``4 s … 4 s + 3`` of the table, then the soot's row (constant in ``u``), and
-    the amounts, their tangents and the sums over wavenumber of a segment (``a``, ``da``,
-    ``g``) and of the one after it (``b``, ``db``, ``h``)."""
+    cubic rows ``4 s … 4 s + 3`` of the table, then the soot's row (constant in ``u``); the
+    amounts and their tangents of a segment (``a``, ``da``) and of the one after it (``b``,
+    ``db``), and the reverse sweep's sums over wavenumber (``g``)."""
     rows = [f"_cubic(c, {4 * s}, j, u)" for s in range(n_gas)] + [f"c[{4 * n_gas}, j]"] * (
         n_tau - n_gas)
     r, a, b, da, db, g = ([f"{name}{s}" for s in range(n_tau)]
@@ -293,15 +294,15 @@ def _gas_code(n_gas: int, n_tau: int) -> dict[str, str]:
     def after(names):  # names, each after a comma: a list that went before
         return "".join(f", {name}" for name in names)
 
-    def taken(names, segment):
-        return [f"{source}[i, {segment}, {s}]" for s, source in enumerate(names)]
+    def taken(array, segment, n):  # the first n entries of a segment's row of the array
+        return [f"{array}[i, {segment}, {s}]" for s in range(n)]
 
     return {
         "planck_row": str(n_tau + 3 * n_gas),
-        "amounts": assign(a, taken(["amount"] * n_tau, "k")),
-        "amounts_next": assign(b, taken(["amount"] * n_tau, "k + 1")),
-        "d_amounts": assign(da, taken(["d_amount"] * n_tau, "k")),
-        "d_amounts_next": assign(db, taken(["d_amount"] * n_tau, "k + 1")),
+        "amounts": assign(a, taken("amount", "k", n_tau)),
+        "amounts_next": assign(b, taken("amount", "k + 1", n_tau)),
+        "d_amounts": assign(da, taken("d_amount", "k", n_tau)),
+        "d_amounts_next": assign(db, taken("d_amount", "k + 1", n_tau)),
         "a_": before(a), "b_": before(b), "da_": before(da), "db_": before(db),
         "_g": after(g),
         "_zeros": after(["zero"] * n_tau),
@@ -310,7 +311,7 @@ def _gas_code(n_gas: int, n_tau: int) -> dict[str, str]:
         "tau_u": total([f"{a[s]} * _slope(c, {4 * s}, j, u)" for s in range(n_gas)]),
         "d_tau": total(["du * tau_u"] + [f"{da[s]} * {r[s]}" for s in range(n_tau)]),
         "_sums_add": after([f"{g[s]} + g * {r[s]}" for s in range(n_tau)]),
-        "store": assign(taken(["d_weights"] * (n_tau + 1), "k"), [*g, "d_offset"]),
+        "store": assign(taken("d_weights", "k", n_tau + 1), [*g, "d_offset"]),
     }
 
 
