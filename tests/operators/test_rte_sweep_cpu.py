@@ -105,7 +105,8 @@ def assert_same_values(tables, fields, lengths, background, rtol):
 @CASES
 def test_segments_in_one_temperature_interval_are_swept_as_the_xla_sweep_does(dtype, rtol):
     # runs of one, two and three segments in the same interval of NODES (300, 700, 1200,
-    # 1800, 2500 K): the sweeps take two such segments in one pass, one alone
+    # 1800, 2500 K): the forward and forward-mode sweeps take two such segments in one pass,
+    # one alone
     tables, fields, lengths, background = scene(dtype, False)
     fields[0] = [400.0, 420.0, 1000.0, 1900.0, 1950.0, 2000.0, 800.0, 810.0, 820.0]
     lengths[:] = lengths[0]  # no padding: every ray has the nine segments
