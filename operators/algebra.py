@@ -144,14 +144,20 @@ def _common_factor(ops: Sequence[Operator]):
     return [_compose(c[:-shared]) for c in chains], _compose(chains[0][-shared:])
 
 
+def _pull_through(inner: Operator, cotangents, dims):
+    r""":math:`P^\mathsf{T} \sum_i w_i`, shaped ``dims``, for cotangents :math:`w_i` of the
+    output of a shared inner factor :math:`P` (``inner``, linear)."""
+    w = sum(np.reshape(wi, inner.dimsd) for wi in cotangents)
+    return np.reshape(inner.adjoint(w), dims)
+
+
 def linearize_together(ops: Sequence[Operator], x):
     r"""Operators on one input linearized at ``x``, their common innermost factors once.
 
     When every operator of ``ops`` is a chain of compositions ending in the same factors
     :math:`P` (the same objects: :math:`F_i = A_i \circ P`, e.g. a data map and a regularizer
-    after one reparameterization), :math:`P` is evaluated and
-    linearized once, and a sum of the operators' pullbacks passes through
-    :math:`J_P^\mathsf{T}` once:
+    after one reparameterization), :math:`P` is evaluated and linearized once, and a sum of
+    the operators' pullbacks passes through :math:`J_P^\mathsf{T}` once:
     :math:`\sum_i J_{F_i}^\mathsf{T} w_i = J_P^\mathsf{T} \sum_i J_{A_i}^\mathsf{T} w_i`.
     Otherwise each operator is linearized on its own.
 
@@ -188,9 +194,9 @@ def linearize_together(ops: Sequence[Operator], x):
                                 for op, outer in zip(ops, outers, strict=True)), strict=True)
 
     def pull(ws, scales):
-        w_inner = sum(c * np.reshape(j.adjoint(w), inner.dimsd)
-                      for j, w, c in zip(j_outers, ws, scales, strict=True) if w is not None)
-        return np.reshape(j_inner.adjoint(w_inner), ops[0].dims)
+        return _pull_through(j_inner, (c * j.adjoint(w) for j, w, c
+                                       in zip(j_outers, ws, scales, strict=True)
+                                       if w is not None), ops[0].dims)
 
     return list(jacobians), pull
 

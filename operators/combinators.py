@@ -12,7 +12,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from operators.algebra import _Combination, _common_factor, _linear_if_possible
+from operators.algebra import (
+    _Combination,
+    _common_factor,
+    _linear_if_possible,
+    _pull_through,
+)
 from operators.base import Operator, _size
 
 
@@ -94,9 +99,9 @@ class VStack(_Combination):
         if self._factored is None:
             return super()._vjp(x, w)
         outers, inner = self._factored
-        w_inner = sum(np.reshape(outer.adjoint(wi), inner.dimsd)
-                      for outer, wi in zip(outers, self._cotangents(w), strict=True))
-        return np.reshape(inner.adjoint(w_inner), self.dims)
+        return _pull_through(inner, (outer.adjoint(wi) for outer, wi
+                                     in zip(outers, self._cotangents(w), strict=True)),
+                             self.dims)
 
     def _assemble(self, outputs):
         return _join(outputs, self.dimsd)
