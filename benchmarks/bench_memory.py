@@ -4,7 +4,7 @@ Run: ``python benchmarks/bench_memory.py [--cells 60] [--pixels 32] [--rays-per-
 [--epochs 10] [--phantom synthetic] [--default-allocator]``.
 
 A process that does what a voxel reconstruction does and nothing else, with the C allocator set
-as the ``invflame`` command sets it (:func:`invflame.process_memory.limit_malloc_arenas`;
+as the ``invflame`` command sets it (:func:`invflame.process_memory.configure_malloc`;
 glibc's defaults with ``--default-allocator``): builds
 :meth:`invflame.scene.Scene.paper`, makes its data with the forward map, compiles the value and
 gradient of the least-squares misfit ``0.5 ||H(f) - g||²`` and runs ``--epochs`` of it. Prints

@@ -2,7 +2,7 @@
 
 Run: ``python benchmarks/bench_rte.py [--cells 60] [--pixels 32] [--rays-per-pixel 9]
 [--repeats 5] [--batch-rays N | --memory-budget BYTES] [--phantom synthetic]
-[--clock cpu|wall] [--stages]``.
+[--clock cpu|wall] [--stages] [--default-allocator]``.
 
 Builds :meth:`invflame.scene.Scene.paper` (60³ grid over a 1 m cube, four 32×32 cameras,
 650–725 cm⁻¹ at 0.04 cm⁻¹ from :meth:`AbsorptionTable.default`, float32) and times, best of
@@ -32,8 +32,9 @@ Peak memory is the process's peak resident set size (``bench_memory.peak_mib``):
 the scene was built, and after exp-only, forward and forward+VJP, before anything else is
 built; and XLA's temporary buffers of the compiled forward+VJP. Last, ``bench_memory.py`` runs
 in a process of its own on the same grid, cameras and rays and prints what a voxel
-reconstruction's process holds: scene, data and gradient epochs only, the allocator set as the
-``invflame`` command sets it.
+reconstruction's process holds: scene, data and gradient epochs only. Both processes set the C
+allocator as the ``invflame`` command sets it (glibc's defaults with ``--default-allocator``;
+``benchmarks/allocator.py``).
 """
 
 import argparse
@@ -45,6 +46,7 @@ from pathlib import Path
 import jax
 import jax.numpy as jnp
 import numpy as np
+from allocator import add_argument, apply
 from bench_memory import peak_mib
 from timing import CLOCKS, best_time
 
@@ -188,7 +190,9 @@ def main() -> None:
                         "machine it leaves out waiting for a core)")
     parser.add_argument("--stages", action="store_true",
                         help="also time the kernel's stages (module notes)")
+    add_argument(parser)
     args = parser.parse_args()
+    allocator = apply(args.default_allocator)
 
     scene = Scene.paper(args.cells, args.pixels, rays_per_pixel=args.rays_per_pixel,
                         memory_budget=args.memory_budget, batch_rays=args.batch_rays)
@@ -225,7 +229,7 @@ def main() -> None:
     peak = peak_mib()
 
     print(f"backend {jax.default_backend()}, {jax.device_count()} device(s), {args.clock} "
-          f"time, best of {args.repeats}")
+          f"time, best of {args.repeats}, {allocator}")
     print(f"grid {scene.grid.shape}, {scene.n_rays} pixels x {args.rays_per_pixel} rays, "
           f"{seg.n_segments} segments (max {seg.max_segments}/ray), {n_eta} wavenumbers, "
           f"{len(scene.tables.species)} absorbing species, {scene.tables.nodes.size} T nodes")
@@ -241,6 +245,7 @@ def main() -> None:
           f"forward+VJP {temp / 2**20:.0f} MiB")
     scene_args = ["--cells", str(args.cells), "--pixels", str(args.pixels),
                   "--rays-per-pixel", str(args.rays_per_pixel), "--phantom", args.phantom]
+    scene_args += ["--default-allocator"] * args.default_allocator
     subprocess.run([sys.executable, str(Path(__file__).with_name("bench_memory.py")),
                     *scene_args], check=True)
 

@@ -3,9 +3,9 @@
 Each module in :data:`COMMANDS` defines ``add_parser(subparsers)``, which registers its
 subcommand and sets ``func`` (``run(args) -> int``) as the parser default.
 
-Before a command runs, glibc's allocator is set to serve all threads from one arena, so that
-arrays freed by one thread are reused by the others
-(:func:`invflame.process_memory.limit_malloc_arenas`).
+Before a command runs, glibc's allocator is set to serve all threads from one arena and to keep
+freed blocks, so that arrays freed by one thread are reused by the others without being mapped
+afresh (:func:`invflame.process_memory.configure_malloc`).
 
 Bad input (:class:`invflame.errors.InvflameError`, a damaged or missing file) ends the command
 with its message on stderr and exit status 2, without a traceback; ``--debug`` shows the
@@ -31,7 +31,7 @@ from invflame.cli import (
     sweep,
 )
 from invflame.errors import InvflameError
-from invflame.process_memory import limit_malloc_arenas
+from invflame.process_memory import configure_malloc
 from solvers.atomic import CorruptFileError
 
 COMMANDS = [reproduce, experiment, config, export, sweep, demo, phantom, lines, co2, rig]
@@ -57,7 +57,7 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``invflame`` command; returns the process exit code (2 for bad
     input, whose message goes to stderr)."""
     args = build_parser().parse_args(argv)
-    limit_malloc_arenas()  # long runs: resident memory that does not creep (module notes)
+    configure_malloc()  # long runs: memory that does not creep, no page faults (module notes)
     try:
         return int(args.func(args) or 0)
     except (InvflameError, CorruptFileError, FileNotFoundError, NotADirectoryError,
