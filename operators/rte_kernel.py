@@ -469,8 +469,9 @@ SWEEPS = ("xla", "numba")
 
 def choose_sweeps(name: str | None = None) -> str:
     """The sweeps to use: ``name`` checked, or by default ``"numba"`` where JAX runs on one
-    CPU device (at the paper's size its JVP took 0.31, its VJP 0.25 and its forward 0.65–0.68
-    of the time of XLA's in two runs of ``benchmarks/bench_rte.py``, ``docs/performance.md``)
+    CPU device (at the paper's size its JVP took 0.24–0.26, its VJP 0.19–0.21 and its forward
+    0.64–0.68 of the time of XLA's in two runs of ``benchmarks/bench_rte.py``,
+    ``docs/performance.md``)
     and ``"xla"`` elsewhere: on other backends, and on several CPU devices in one process,
     where the Numba sweeps' host callbacks, called from the devices' threads, deadlock the
     sharded kernel's collectives (``tests/operators/sharding_check.py`` aborts in XLA's
