@@ -23,7 +23,7 @@ the repeats:
   rows, Horner sums, the optical depth), the Planck spline, the transmission (``exp`` and
   absorptance), the sums over wavenumber of the reverse sweep, the whole forward and reverse
   sweeps (the reverse one as XLA runs it and as Numba does, :mod:`operators.rte_sweep_cpu`,
-  all rays at once on host arrays), and the gathers and scatters that put rays into batches and
+  all rays at once, called by XLA), and the gathers and scatters that put rays into batches and
   back (with their VJP).
 
 "elements" is the number of real segments times the number of wavenumbers; the kernel also
@@ -128,9 +128,14 @@ def stages(scene: Scene, fields, repeats: int, clock: str) -> dict:
         lambda a: rte_kernel._sweep_vjp(tables, *a[1], a[0], *a[2]), (n, b, s)))
     times["reverse sweep"] = best_time(lambda: reverse(n_segments, batches, spectra_in),
                                        repeats, clock)
-    sweep, inputs, _ = rte_kernel._numba_sweep(tables, segment_fields, lengths)
-    host = [np.asarray(a) for a in (*inputs, radiance, cotangent)]
-    times["reverse sweep, Numba"] = best_time(lambda: sweep(*host), repeats, clock)
+    index, weights = rte_kernel._numba_weights(tables, segment_fields)
+    amount, offset = weights(segment_fields, lengths)
+    shapes = (jax.ShapeDtypeStruct((*amount.shape[:-1], amount.shape[-1] + 1), tables.dtype),
+              jax.ShapeDtypeStruct((0, tables.n_eta), tables.dtype))
+    numba_reverse = jax.jit(lambda t, *a: rte_kernel._numba_sweep("reverse", shapes, t, *a))
+    numba_inputs = (tables, index, amount, offset, lengths, radiance, cotangent)
+    times["reverse sweep, Numba"] = best_time(lambda: numba_reverse(*numba_inputs), repeats,
+                                              clock)
 
     def batching(f, s, spectrum):
         out, to_inputs = jax.vjp(

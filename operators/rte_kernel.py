@@ -56,8 +56,9 @@ sweep, with the same memory (JAX's forward mode through the XLA sweep).
 **Two implementations** of the sweeps (:func:`choose_sweeps`): JAX's below, lowered by XLA for
 any backend, and, the default on one CPU device, the same three sweeps compiled by Numba (the
 forward-mode one written out, not JAX's), one ray at a time with its spectra in cache, called
-as host callbacks (:mod:`operators.rte_sweep_cpu`); XLA's CPU backend writes each intermediate
-spectrum of a ray batch to memory instead. ``docs/performance.md`` has the measured costs.
+by XLA on its own buffers (FFI calls, :mod:`operators.rte_sweep_cpu`,
+:mod:`operators.xla_ffi`); XLA's CPU backend writes each intermediate spectrum of a ray batch to
+memory instead. ``docs/performance.md`` has the measured costs.
 
 **Layout** of the XLA sweeps. Rays are sorted by their number of segments and processed in
 batches (:mod:`operators.rte_batches`), each batch sweeping only as many segments as its
@@ -87,7 +88,7 @@ from operators.rte_batches import (
     segment_counts,
     spectra_batches,
 )
-from operators.rte_sweep_cpu import sweep, sweep_jvp, sweep_vjp
+from operators.rte_sweep_cpu import target
 from operators.rte_tables import RTETables
 
 
@@ -325,16 +326,10 @@ def _radiance_tangent_jvp(primals, tangents):
     index, weights = _numba_weights(tables, fields)
     (amount, offset), (d_amount, d_offset) = jax.jvp(weights, (fields, lengths),
                                                      (d_fields, d_lengths))
-    backgrounds = () if background is None else (background, d_background)
-
-    def on_host(coef, index, amount, offset, counts, d_amount, d_offset, *backgrounds):
-        background, d_background = backgrounds or (None, None)
-        return sweep_jvp(coef, index, amount, offset, counts, background, d_amount, d_offset,
-                         d_background, n_gas=_n_gas(tables, amount))
-
     shape = _spectra_shape(tables, lengths)
-    return _host_call(on_host, (shape, shape), tables.coef, index, amount, offset,
-                      segment_counts(lengths), d_amount, d_offset, *backgrounds)
+    return _numba_sweep("forward_mode", (shape, shape), tables, index, amount, offset, lengths,
+                        _background(tables, background), d_amount, d_offset,
+                        _background(tables, d_background))
 
 
 def _cotangents_xla(batch_rays, tables: RTETables, fields, lengths, radiance, cotangent,
@@ -354,7 +349,7 @@ def _cotangents_xla(batch_rays, tables: RTETables, fields, lengths, radiance, co
     return d_fields, d_lengths, from_batches(d_background, order) if has_background else None
 
 
-# -- the Numba sweeps (operators.rte_sweep_cpu) as host callbacks ------------------------------
+# -- the Numba sweeps (operators.rte_sweep_cpu) as XLA FFI calls -----------------------------
 def _numba_weights(tables: RTETables, fields):
     """Each segment's temperature interval, and the map ``(fields, lengths) -> (amount,
     offset)`` to the weights the Numba sweeps take (differentiable by JAX)."""
@@ -371,90 +366,46 @@ def _spectra_shape(tables: RTETables, lengths):
     return jax.ShapeDtypeStruct((lengths.shape[0], tables.n_eta), tables.dtype)
 
 
+def _background(tables: RTETables, background):
+    """The background as the sweeps take it: one zero row for none."""
+    return jnp.zeros((1, tables.n_eta), tables.dtype) if background is None else background
+
+
+def _numba_sweep(kind, results, tables: RTETables, index, amount, offset, lengths, *operands):
+    """Sweep ``kind`` of :mod:`operators.rte_sweep_cpu` run by XLA on its buffers (an FFI
+    call, :func:`operators.rte_sweep_cpu.target`), with the operands every sweep takes made
+    from ``index``, ``amount``, ``offset`` and ``lengths``, then ``operands``; returns the
+    arrays shaped as ``results``."""
+    counts = segment_counts(lengths)
+    order = jnp.argsort(-counts, stable=True)
+    name = target(kind, _n_gas(tables, amount), amount.shape[-1], tables.dtype)
+    call = jax.ffi.ffi_call(name, results, vmap_method="sequential")
+    return call(tables.coef, index.astype(jnp.int32), amount, offset,
+                counts.astype(jnp.int32), order.astype(jnp.int32), *operands)
+
+
 def _radiance_numba(tables: RTETables, fields, lengths, background):
     """The radiance by the forward sweep of :mod:`operators.rte_sweep_cpu`."""
     index, weights = _numba_weights(tables, fields)
     amount, offset = weights(fields, lengths)
-    backgrounds = () if background is None else (background,)
-    (radiance,) = _host_call(lambda *a: (sweep(*a, n_gas=_n_gas(tables, amount)),),
-                             (_spectra_shape(tables, lengths),), tables.coef, index, amount,
-                             offset, segment_counts(lengths), *backgrounds)
-    return radiance
+    return _numba_sweep("forward", _spectra_shape(tables, lengths), tables, index, amount,
+                        offset, lengths, _background(tables, background))
 
 
 def _cotangents_numba(tables: RTETables, fields, lengths, radiance, cotangent, has_background):
     """Cotangents of the fields, lengths and background (None without one) by the reverse
     sweep of :mod:`operators.rte_sweep_cpu`, the weights' cotangents carried to the fields
     and lengths by JAX."""
-    sweep, inputs, to_inputs = _numba_sweep(tables, fields, lengths)
-    amount = inputs[2]
+    index, weights = _numba_weights(tables, fields)
+    (amount, offset), to_inputs = jax.vjp(weights, fields, lengths)
     n_tau = amount.shape[-1]
     n_rays = lengths.shape[0] if has_background else 0
     shapes = (jax.ShapeDtypeStruct(amount.shape[:-1] + (n_tau + 1,), tables.dtype),
               jax.ShapeDtypeStruct((n_rays, tables.n_eta), tables.dtype))
-    d_weights, transmittance = _host_call(partial(sweep, with_transmittance=has_background),
-                                          shapes, *inputs, radiance, cotangent)
+    d_weights, transmittance = _numba_sweep("reverse", shapes, tables, index, amount, offset,
+                                            lengths, radiance, cotangent)
     d_fields, d_lengths = to_inputs((d_weights[..., :n_tau], d_weights[..., n_tau]))
     return d_fields, d_lengths, cotangent * transmittance if has_background else None
-
-
-def _numba_sweep(tables: RTETables, fields, lengths):
-    """The Numba reverse sweep set up for segment fields ``(n_fields, n_rays, n_seg)``.
-
-    Returns
-    -------
-    sweep : callable
-        :func:`operators.rte_sweep_cpu.sweep_vjp` with its ``n_gas``; call it as
-        ``sweep(*inputs, radiance, cotangent)``.
-    inputs : tuple of jax.Array
-        The table coefficients, each segment's temperature interval, amounts and offset, and
-        each ray's segment count.
-    to_inputs : callable
-        Pullback of the amounts and offset to ``(fields, lengths)``.
-    """
-    index, weights = _numba_weights(tables, fields)
-    (amount, offset), to_inputs = jax.vjp(weights, fields, lengths)
-    sweep = partial(sweep_vjp, n_gas=_n_gas(tables, amount))
-    return sweep, (tables.coef, index, amount, offset, segment_counts(lengths)), to_inputs
-
-
-def _wide(dtype) -> bool:
-    return np.dtype(dtype).itemsize == 8
-
-
-def _host_call(fn, result_shapes, *args):
-    """``jax.pure_callback(fn, result_shapes, *args)`` that keeps 64-bit values 64-bit.
-
-    JAX calls ``fn`` on a thread of its own, where its 64-bit mode is off unless the process
-    turned it on (:func:`operators.base.precision` turns it on in the caller's thread only), and
-    would round float64 operands and results to float32 there. 64-bit arrays therefore cross as
-    pairs of uint32 and are viewed back on either side.
-    """
-    dtypes = [np.dtype(x.dtype) for x in args]
-
-    def unpack(x, dtype):  # on the host: uint32 pairs -> 64-bit values
-        return np.ascontiguousarray(x).view(dtype)[..., 0] if _wide(dtype) else x
-
-    def pack(x, dtype):  # on the host: 64-bit values -> uint32 pairs
-        if not _wide(dtype):
-            return x
-        x = np.ascontiguousarray(x, dtype)
-        return x.view(np.uint32).reshape(*x.shape, 2)
-
-    def on_host(*packed):
-        values = fn(*(unpack(x, d) for x, d in zip(packed, dtypes, strict=True)))
-        return tuple(pack(v, s.dtype) for v, s in zip(values, result_shapes, strict=True))
-
-    def send(x):
-        x = jnp.asarray(x)
-        return jax.lax.bitcast_convert_type(x, jnp.uint32) if _wide(x.dtype) else x
-
-    packed_shapes = tuple(jax.ShapeDtypeStruct((*s.shape, 2), jnp.uint32) if _wide(s.dtype)
-                          else s for s in result_shapes)
-    results = jax.pure_callback(on_host, packed_shapes, *(send(x) for x in args),
-                                vmap_method="sequential")
-    return tuple(jax.lax.bitcast_convert_type(r, s.dtype) if _wide(s.dtype) else r
-                 for r, s in zip(results, result_shapes, strict=True))
 
 
 _radiance.defvjp(_radiance_fwd, _radiance_bwd)
@@ -473,9 +424,9 @@ def choose_sweeps(name: str | None = None) -> str:
     0.64–0.68 of the time of XLA's in two runs of ``benchmarks/bench_rte.py``,
     ``docs/performance.md``)
     and ``"xla"`` elsewhere: on other backends, and on several CPU devices in one process,
-    where the Numba sweeps' host callbacks, called from the devices' threads, deadlock the
-    sharded kernel's collectives (``tests/operators/sharding_check.py`` aborts in XLA's
-    all-reduce).
+    whose devices would call the Numba sweeps at once, each call spreading over all the cores
+    itself (``numba.prange``), and where Numba's threading layer of last resort (workqueue,
+    where neither OpenMP nor TBB is installed) aborts on concurrent calls.
 
     Raises
     ------

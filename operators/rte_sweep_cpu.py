@@ -19,8 +19,13 @@ one to the next. For that the compiler needs the gases written out one by one (a
 count known only at run time, inside the loop over wavenumber, is not vectorized: 8 × slower
 in a trial), so the sweeps' source is a template, :data:`_KERNELS`, whose per-gas lines
 :func:`_kernels` writes for the tables' number of gases into a file of its own
-(:func:`_source_file`), which Numba compiles on first use (2–6 s per sweep in float32 on two
-cores, first-call times) and caches on disk.
+(:func:`_source_file`), one per float dtype, which Numba compiles on first use (2–6 s per sweep
+in float32 on two cores, first-call times) and caches on disk.
+
+XLA runs each sweep on its own buffers: :func:`target` names a handler of XLA's typed FFI
+(:mod:`operators.xla_ffi`) that reads the operands and writes the results in place, where a
+host callback (:func:`jax.pure_callback`) copied both (about 4 ms of a forward evaluation and
+12 ms of a gradient's at the paper's size, ``docs/performance.md``).
 
 The sweeps need each segment's absorptance :math:`1 - e^{-\tau}` only (:func:`_absorptance`):
 the transmittance in front of the next segment is :math:`P - P (1 - e^{-\tau})`. float32 uses a
@@ -50,8 +55,9 @@ from numba.core import types
 from numba.extending import intrinsic, overload
 
 from operators.disk_cache import cache_dir
+from operators.xla_ffi import HANDLER, register
 
-__all__ = ["sweep", "sweep_jvp", "sweep_vjp"]
+__all__ = ["KINDS", "target"]
 
 
 @intrinsic
@@ -133,6 +139,16 @@ _KERNELS = """import numba
 import numpy as np
 
 from operators.rte_sweep_cpu import _absorptance, _cubic, _slope
+from operators.xla_ffi import argument, executing, no_error, result
+
+DTYPE, INDEX = np.{dtype}, np.int32
+
+
+@numba.njit(inline="always")
+def common_operands(frame):
+    return (argument(frame, 0, 3, DTYPE), argument(frame, 1, 2, INDEX),
+            argument(frame, 2, 3, DTYPE), argument(frame, 3, 2, DTYPE),
+            argument(frame, 4, 1, INDEX), argument(frame, 5, 1, INDEX))
 
 
 @numba.njit(fastmath=True, inline="always")
@@ -144,9 +160,8 @@ def forward_step(c, j, u, {a_}through, partial):
 
 
 @numba.njit(fastmath=True, parallel=True, cache=True)
-def forward(coef, index, amount, offset, n_segments, background, order):
+def forward(coef, index, amount, offset, n_segments, order, background, radiance):
     n_rays, n_eta = amount.shape[0], coef.shape[2]
-    radiance = np.empty((n_rays, n_eta), coef.dtype)
     for q in numba.prange(n_rays):
         i = order[q]
         partial_sum = np.zeros(n_eta, coef.dtype)
@@ -167,9 +182,16 @@ def forward(coef, index, amount, offset, n_segments, background, order):
                     through[j], partial_sum[j] = forward_step(c, j, u, {a_}through[j],
                                                               partial_sum[j])
                 k += 1
+        b = min(i, background.shape[0] - 1)
         for j in range(n_eta):
-            radiance[i, j] = partial_sum[j] + through[j] * background[i, j]
-    return radiance
+            radiance[i, j] = partial_sum[j] + through[j] * background[b, j]
+
+
+def forward_handler(frame):
+    if executing(frame):
+        forward(*common_operands(frame), argument(frame, 6, 2, DTYPE),
+                result(frame, 0, 2, DTYPE))
+    return no_error()
 
 
 @numba.njit(fastmath=True, inline="always")
@@ -187,11 +209,9 @@ def forward_mode_step(c, j, u, du, {a_}{da_}through, partial, d_sum, depth):
 
 
 @numba.njit(fastmath=True, parallel=True, cache=True)
-def forward_mode(coef, index, amount, offset, n_segments, background, d_amount, d_offset,
-                 d_background, order):
+def forward_mode(coef, index, amount, offset, n_segments, order, background, d_amount,
+                 d_offset, d_background, radiance, d_radiance):
     n_rays, n_eta = amount.shape[0], coef.shape[2]
-    radiance = np.empty((n_rays, n_eta), coef.dtype)
-    d_radiance = np.empty((n_rays, n_eta), coef.dtype)
     for q in numba.prange(n_rays):
         i = order[q]
         partial_sum = np.zeros(n_eta, coef.dtype)
@@ -218,11 +238,20 @@ def forward_mode(coef, index, amount, offset, n_segments, background, d_amount, 
                     through[j], partial_sum[j], d_sum[j], depth[j] = forward_mode_step(
                         c, j, u, du, {a_}{da_}through[j], partial_sum[j], d_sum[j], depth[j])
                 k += 1
+        b = min(i, background.shape[0] - 1)
         for j in range(n_eta):
-            radiance[i, j] = partial_sum[j] + through[j] * background[i, j]
-            d_radiance[i, j] = d_sum[j] + through[j] * (d_background[i, j]
-                                                        - depth[j] * background[i, j])
-    return radiance, d_radiance
+            radiance[i, j] = partial_sum[j] + through[j] * background[b, j]
+            d_radiance[i, j] = d_sum[j] + through[j] * (d_background[b, j]
+                                                        - depth[j] * background[b, j])
+
+
+def forward_mode_handler(frame):
+    if executing(frame):
+        forward_mode(*common_operands(frame), argument(frame, 6, 2, DTYPE),
+                     argument(frame, 7, 3, DTYPE), argument(frame, 8, 2, DTYPE),
+                     argument(frame, 9, 2, DTYPE), result(frame, 0, 2, DTYPE),
+                     result(frame, 1, 2, DTYPE))
+    return no_error()
 
 
 @numba.njit(fastmath=True, inline="always")
@@ -240,14 +269,13 @@ def reverse_step(c, j, u, {a_}through, partial, radiance, cotangent, d_offset{_g
 
 
 @numba.njit(fastmath=True, parallel=True, cache=True)
-def reverse(coef, index, amount, offset, n_segments, radiance, cotangent, with_transmittance,
-            order):
-    n_rays, n_seg, n_eta = amount.shape[0], amount.shape[1], coef.shape[2]
+def reverse(coef, index, amount, offset, n_segments, order, radiance, cotangent, d_weights,
+            transmittance):
+    n_rays, n_eta = amount.shape[0], coef.shape[2]
     zero = coef.dtype.type(0)
-    d_weights = np.zeros((n_rays, n_seg, {n_tau} + 1), coef.dtype)
-    transmittance = np.empty((n_rays if with_transmittance else 0, n_eta), coef.dtype)
     for q in numba.prange(n_rays):
         i = order[q]
+        d_weights[i, n_segments[i]:] = zero
         partial_sum = np.zeros(n_eta, coef.dtype)
         through = np.ones(n_eta, coef.dtype)
         for k in range(n_segments[i]):
@@ -259,16 +287,24 @@ def reverse(coef, index, amount, offset, n_segments, radiance, cotangent, with_t
                     c, j, u, {a_}through[j], partial_sum[j], radiance[i, j], cotangent[i, j],
                     d_offset{_g})
             {store}
-        if with_transmittance:
+        if transmittance.shape[0] > 0:
             transmittance[i] = through
-    return d_weights, transmittance
+
+
+def reverse_handler(frame):
+    if executing(frame):
+        reverse(*common_operands(frame), argument(frame, 6, 2, DTYPE),
+                argument(frame, 7, 2, DTYPE), result(frame, 0, 3, DTYPE),
+                result(frame, 1, 2, DTYPE))
+    return no_error()
 """
-"""The three sweeps as Python source. The forward and forward-mode sweeps take a segment, or
-two consecutive segments in the same temperature interval (their table rows read once for
-both), in one pass over wavenumber, the reverse sweep one segment; each sweep's step at one
-wavenumber is an inlined function. Each ``{…}`` stands for a line, an expression or names
-written out gas by gas (:func:`_gas_code`), which :func:`_kernels` fills in for the tables'
-gases."""
+"""The three sweeps as Python source, each with its FFI handler (:func:`target`). The forward
+and forward-mode sweeps take a segment, or two consecutive segments in the same temperature
+interval (their table rows read once for both), in one pass over wavenumber, the reverse sweep
+one segment; each sweep's step at one wavenumber is an inlined function. The sweeps write into
+XLA's result buffers; a background of one row serves every ray. Each ``{…}`` stands for a
+line, an expression or names written out gas by gas (:func:`_gas_code`), which
+:func:`_kernels` fills in for the tables' gases, or for the float dtype."""
 
 
 def _gas_code(n_gas: int, n_tau: int) -> dict[str, str]:
@@ -315,15 +351,18 @@ def _gas_code(n_gas: int, n_tau: int) -> dict[str, str]:
 
 
 @functools.cache
-def _kernels(n_gas: int, n_tau: int) -> ModuleType:
-    """The sweeps of :data:`_KERNELS` for ``n_gas`` gases and ``n_tau`` rows of the optical
-    depth (``n_tau - n_gas`` soot rows): a module ``forward``, ``forward_mode``, ``reverse``,
-    compiled by Numba on their first call and cached on disk (:func:`_source_file`)."""
+def _kernels(n_gas: int, n_tau: int, dtype: str) -> ModuleType:
+    """The sweeps of :data:`_KERNELS` for ``n_gas`` gases, ``n_tau`` rows of the optical
+    depth (``n_tau - n_gas`` soot rows) and float ``dtype``: a module of ``forward``,
+    ``forward_mode``, ``reverse`` and their handlers, compiled by Numba on first use and cached
+    on disk (:func:`_source_file`)."""
     if not 0 <= n_gas <= n_tau <= n_gas + 1:
         raise ValueError(f"the sweeps take n_gas >= 0 gases and at most one soot row; got "
                          f"n_gas = {n_gas}, n_tau = {n_tau} rows of the optical depth")
-    path = _source_file(_KERNELS.format(n_tau=n_tau, **_gas_code(n_gas, n_tau)),
-                        f"sweeps_{n_gas}_gases_{n_tau - n_gas}_soot")
+    if dtype not in ("float32", "float64"):
+        raise ValueError(f"the sweeps run in float32 or float64; got {dtype}")
+    path = _source_file(_KERNELS.format(n_tau=n_tau, dtype=dtype, **_gas_code(n_gas, n_tau)),
+                        f"sweeps_{n_gas}_gases_{n_tau - n_gas}_soot_{dtype}")
     spec = importlib.util.spec_from_file_location(f"{__name__}_{path.stem}", path)
     module = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = module  # where Numba's cache finds the sweeps' globals
@@ -356,130 +395,66 @@ def _source_file(source: str, stem: str) -> Path:
                   f"{folders[1]}; set INVFLAME_CACHE to a writable folder") from failure
 
 
-def _order(n_segments):
-    """Rays longest first, so that the cores' last rays are short ones."""
-    return np.argsort(-n_segments, kind="stable")
+#: The sweeps, by the names :func:`target` takes.
+KINDS = ("forward", "forward_mode", "reverse")
 
 
-def _no_background(coef, n_rays):
-    """A zero background, (n_rays, n_eta) without the memory (a broadcast view)."""
-    return np.broadcast_to(np.zeros(1, coef.dtype), (n_rays, coef.shape[2]))
+@functools.cache
+def target(kind: str, n_gas: int, n_tau: int, dtype) -> str:
+    r"""The name of the :func:`jax.ffi.ffi_call` target that runs sweep ``kind`` on XLA's
+    buffers (:mod:`operators.xla_ffi`), its handler compiled on first use (2–6 s, or loaded from
+    Numba's disk cache).
 
+    Every sweep takes, in this order: ``coef`` (n_intervals, n_rows, n_eta), the tables'
+    coefficients (:attr:`operators.rte_tables.RTETables.coef`); ``index`` (n_rays, n_seg),
+    int32, each segment's temperature interval; ``amount`` (n_rays, n_seg, n_tau), the amounts
+    :math:`X_s \Delta s / T` (m/K) per gas, then the soot's :math:`f_v \Delta s` (m);
+    ``offset`` (n_rays, n_seg), the offset :math:`u \in [0, 1]` in the interval;
+    ``n_segments`` (n_rays,), int32, each ray's segments (those after are padding); ``order``
+    (n_rays,), int32, the rays longest first (so that the cores' last rays are short ones).
+    Floats in ``dtype``, radiances in W/(m²·sr·cm⁻¹). Then:
 
-def sweep(coef, index, amount, offset, n_segments, background=None, *, n_gas):
-    r"""Each ray's radiance: the forward sweep, camera side first.
-
-    :math:`I = \sum_k B_k (1 - t_k) P_k + \tau_\mathrm{ray} I_\mathrm{bg}` (module notes of
-    :mod:`operators.rte_kernel`), accumulated with :math:`P_k` segment by segment.
-
-    Parameters
-    ----------
-    coef, index, amount, offset, n_segments, n_gas
-        As in :func:`sweep_vjp`.
-    background : ndarray, shape (n_rays, n_eta), optional
-        Radiance behind each ray in W/(m²·sr·cm⁻¹) (default None: none).
-
-    Returns
-    -------
-    ndarray, shape (n_rays, n_eta)
-        Spectral radiance in W/(m²·sr·cm⁻¹).
-    """
-    coef, index, amount, offset, n_segments = _host_inputs(coef, index, amount, offset,
-                                                           n_segments)
-    if background is None:
-        background = _no_background(coef, amount.shape[0])
-    return _kernels(int(n_gas), amount.shape[2]).forward(
-        coef, index, amount, offset, n_segments, np.asarray(background, coef.dtype),
-        _order(n_segments))
-
-
-def sweep_jvp(coef, index, amount, offset, n_segments, background, d_amount, d_offset,
-              d_background, *, n_gas):
-    r"""Each ray's radiance and its tangent: the forward-mode sweep, camera side first.
-
-    With :math:`D_k = \sum_{m<k} \dot\tau_m` the tangent of the optical depth in front of
-    segment :math:`k` (:math:`\dot P_k = -P_k D_k`),
-
-    .. math::
-
-        \dot I = \sum_k P_k \left[(1 - t_k)(\dot B_k - B_k D_k) + t_k B_k \dot\tau_k
-        \right] + \tau_\mathrm{ray} (\dot I_\mathrm{bg} - D_n I_\mathrm{bg}),
-
-    :math:`\dot\tau_k = \sum_s \dot a_s \tilde\sigma_s + \dot u\,\partial_u\tau`,
-    :math:`\dot B_k = \dot u\,\partial_u \tilde B`: one pass per segment besides the
-    optical depth's, no stored spectra.
+    ``"forward"``
+        ``background`` (n_rays or 1, n_eta), the radiance behind each ray (one row: behind
+        every ray) → the radiance (n_rays, n_eta),
+        :math:`I = \sum_k B_k (1 - t_k) P_k + \tau_\mathrm{ray} I_\mathrm{bg}`.
+    ``"forward_mode"``
+        ``background``, ``d_amount``, ``d_offset`` (tangents shaped as ``amount`` and
+        ``offset``), ``d_background`` (shaped as ``background``) → the radiance and its
+        tangent: with :math:`D_k = \sum_{m<k} \dot\tau_m` the tangent of the optical depth in
+        front of segment :math:`k` (:math:`\dot P_k = -P_k D_k`),
+        :math:`\dot I = \sum_k P_k [(1 - t_k)(\dot B_k - B_k D_k) + t_k B_k \dot\tau_k]
+        + \tau_\mathrm{ray} (\dot I_\mathrm{bg} - D_n I_\mathrm{bg})`,
+        :math:`\dot\tau_k = \sum_s \dot a_s \tilde\sigma_s + \dot u\,\partial_u\tau`,
+        :math:`\dot B_k = \dot u\,\partial_u \tilde B`.
+    ``"reverse"``
+        ``radiance`` and ``cotangent`` (n_rays, n_eta), the kernel's radiance (background
+        included) and its cotangent → ``d_weights`` (n_rays, n_seg, n_tau + 1), the
+        cotangents of the amounts, then of the offset (per segment, the sums over wavenumber
+        of :math:`g_\tau` times each row of :math:`\tau`, and of
+        :math:`g_\tau\,\partial\tau/\partial u + g_B\,\partial B/\partial u`; zero on
+        padding), and each ray's transmittance :math:`\tau_\mathrm{ray}` (n_rays or 0, n_eta;
+        asked for with 0 rows where no background needs its cotangent).
 
     Parameters
     ----------
-    coef, index, amount, offset, n_segments, n_gas
-        As in :func:`sweep_vjp`.
-    background, d_background : ndarray, shape (n_rays, n_eta), or None
-        Radiance behind each ray in W/(m²·sr·cm⁻¹) and its tangent (None: zero).
-    d_amount, d_offset : ndarray
-        Tangents of ``amount`` and ``offset``, shaped as they are.
+    kind : {"forward", "forward_mode", "reverse"}
+        The sweep.
+    n_gas, n_tau : int
+        Absorbing gases, and rows of the optical depth (``n_tau - n_gas`` is 1 with soot,
+        else 0).
+    dtype : {"float32", "float64"}
+        The floats' dtype.
 
-    Returns
-    -------
-    radiance, d_radiance : ndarray, shape (n_rays, n_eta)
-        Spectral radiance in W/(m²·sr·cm⁻¹) and its tangent.
+    Raises
+    ------
+    ValueError
+        For an unknown kind or dtype, or more than one soot row.
     """
-    coef, index, amount, offset, n_segments = _host_inputs(coef, index, amount, offset,
-                                                           n_segments)
-    n_rays = amount.shape[0]
-    background, d_background = (_no_background(coef, n_rays) if b is None
-                                else np.asarray(b, coef.dtype)
-                                for b in (background, d_background))
-    return _kernels(int(n_gas), amount.shape[2]).forward_mode(
-        coef, index, amount, offset, n_segments, background, np.asarray(d_amount, coef.dtype),
-        np.asarray(d_offset, coef.dtype), d_background, _order(n_segments))
-
-
-def sweep_vjp(coef, index, amount, offset, n_segments, radiance, cotangent, *, n_gas,
-              with_transmittance=True):
-    r"""Cotangents of the segment weights of every ray, and each ray's transmittance.
-
-    The reverse sweep of :func:`operators.rte_kernel._sweep_vjp` for all rays at once, with
-    the Planck spline (``planck == "table"``): per segment, camera side first, the sums over
-    wavenumber of :math:`g_\tau` times each row of :math:`\tau` (the amounts' cotangents) and of
-    :math:`g_\tau\,\partial\tau/\partial u + g_B\,\partial B/\partial u` (the offset's).
-
-    Parameters
-    ----------
-    coef : ndarray, shape (n_intervals, n_rows, n_eta)
-        :attr:`operators.rte_tables.RTETables.coef` (float32 or float64).
-    index : ndarray of int, shape (n_rays, n_seg)
-        Temperature interval of each segment.
-    amount : ndarray, shape (n_rays, n_seg, n_tau)
-        Amounts :math:`X_s \Delta s / T` (m/K) per gas, then the soot's :math:`f_v \Delta s` (m).
-    offset : ndarray, shape (n_rays, n_seg)
-        Offset :math:`u \in [0, 1]` in the temperature interval.
-    n_segments : ndarray of int, shape (n_rays,)
-        Segments of each ray (those after are padding, their cotangents zero).
-    radiance, cotangent : ndarray, shape (n_rays, n_eta)
-        The kernel's radiance in W/(m²·sr·cm⁻¹) (background included) and its cotangent.
-    n_gas : int
-        Absorbing gases (``n_tau - n_gas`` is 1 with soot, else 0).
-    with_transmittance : bool, optional
-        Whether to return each ray's transmittance (default True; without a background its
-        cotangent is not needed).
-
-    Returns
-    -------
-    d_weights : ndarray, shape (n_rays, n_seg, n_tau + 1)
-        Cotangents of the amounts, then of the offset.
-    transmittance : ndarray, shape (n_rays, n_eta), or (0, n_eta)
-        Each ray's transmittance :math:`\tau_\mathrm{ray}` (the background's cotangent is
-        ``cotangent * transmittance``); no rows without ``with_transmittance``.
-    """
-    coef, index, amount, offset, n_segments = _host_inputs(coef, index, amount, offset,
-                                                           n_segments)
-    return _kernels(int(n_gas), amount.shape[2]).reverse(
-        coef, index, amount, offset, n_segments, np.asarray(radiance, coef.dtype),
-        np.asarray(cotangent, coef.dtype), bool(with_transmittance), _order(n_segments))
-
-
-def _host_inputs(coef, index, amount, offset, n_segments):
-    """The sweeps' common inputs as the compiled kernels take them."""
-    coef = np.ascontiguousarray(coef)
-    return (coef, np.asarray(index, np.int64), np.asarray(amount, coef.dtype),
-            np.asarray(offset, coef.dtype), np.asarray(n_segments, np.int64))
+    if kind not in KINDS:
+        raise ValueError(f"unknown sweep {kind!r}; choose one of {KINDS}")
+    dtype = np.dtype(dtype).name
+    module = _kernels(int(n_gas), int(n_tau), dtype)
+    numba.get_num_threads()  # starts Numba's threads, whose symbols a cached handler links to
+    handler = numba.cfunc(HANDLER, cache=True)(getattr(module, f"{kind}_handler"))
+    return register(f"invflame_{kind}_{n_gas}_gases_{n_tau}_rows_{dtype}", handler)

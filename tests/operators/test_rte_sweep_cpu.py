@@ -18,7 +18,7 @@ from operators.rte_kernel import (
     emission_radiance,
     emission_radiance_jvp,
 )
-from operators.rte_sweep_cpu import _absorptance, _kernels, _source_file
+from operators.rte_sweep_cpu import _absorptance, _source_file, target
 from operators.rte_tables import RTETables, rayleigh_soot_constant
 from operators.tabulated import PiecewiseCubic
 
@@ -143,12 +143,12 @@ def test_the_sweeps_source_is_written_once_and_elsewhere_when_the_cache_cannot_b
 
 def test_the_sweeps_refuse_more_than_one_soot_row():
     with pytest.raises(ValueError, match="at most one soot row; got n_gas = 2, n_tau = 4"):
-        _kernels(2, 4)
+        target("reverse", 2, 4, "float32")
 
 
 def test_float64_stays_float64_with_64_bit_mode_in_the_callers_thread_only():
-    """`precision(float64)` turns on JAX's 64-bit mode in the calling thread only; JAX runs the
-    Numba sweep's host callback on a thread of its own, which must not round to float32."""
+    """`precision(float64)` turns on JAX's 64-bit mode in the calling thread only; XLA runs the
+    Numba sweeps on threads of its own, and nothing may round to float32 on the way."""
     fields, lengths = random_rays(n_rays=7, n_seg=9, seed=5)
     background = np.zeros((7, ETA.size))
     jax.config.update("jax_enable_x64", False)
