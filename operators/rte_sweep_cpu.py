@@ -24,7 +24,7 @@ in float32 on two cores, first-call times) and caches on disk.
 
 XLA runs each sweep on its own buffers: :func:`target` names a handler of XLA's typed FFI
 (:mod:`operators.xla_ffi`) that reads the operands and writes the results in place, where a
-host callback (:func:`jax.pure_callback`) copied both (about 4 ms of a forward evaluation and
+host callback (:func:`jax.pure_callback`) would copy both (about 4 ms of a forward evaluation and
 12 ms of a gradient's at the paper's size, ``docs/performance.md``).
 
 The sweeps need each segment's absorptance :math:`1 - e^{-\tau}` only (:func:`_absorptance`):
