@@ -361,7 +361,7 @@ def _kernels(n_gas: int, n_tau: int, dtype: str) -> ModuleType:
                          f"n_gas = {n_gas}, n_tau = {n_tau} rows of the optical depth")
     if dtype not in ("float32", "float64"):
         raise ValueError(f"the sweeps run in float32 or float64; got {dtype}")
-    path = _source_file(_KERNELS.format(n_tau=n_tau, dtype=dtype, **_gas_code(n_gas, n_tau)),
+    path = _source_file(_KERNELS.format(dtype=dtype, **_gas_code(n_gas, n_tau)),
                         f"sweeps_{n_gas}_gases_{n_tau - n_gas}_soot_{dtype}")
     spec = importlib.util.spec_from_file_location(f"{__name__}_{path.stem}", path)
     module = importlib.util.module_from_spec(spec)
