@@ -146,6 +146,13 @@ def test_the_sweeps_refuse_more_than_one_soot_row():
         target("reverse", 2, 4, "float32")
 
 
+def test_the_sweeps_refuse_an_unknown_kind_or_dtype():
+    with pytest.raises(ValueError, match="unknown sweep 'backward'; choose one of"):
+        target("backward", 2, 2, "float32")
+    with pytest.raises(ValueError, match="run in float32 or float64; got float16"):
+        target("reverse", 2, 2, "float16")
+
+
 def test_float64_stays_float64_with_64_bit_mode_in_the_callers_thread_only():
     """`precision(float64)` turns on JAX's 64-bit mode in the calling thread only; XLA runs the
     Numba sweeps on threads of its own, and nothing may round to float32 on the way."""
