@@ -6,17 +6,19 @@ On a grid of fields shaped ``(n_fields, nx, ny, nz)`` with spacings :math:`\Delt
 .. math:: (D_x f)_{c,i,j,k} = (f_{c,i+1,j,k} - f_{c,i,j,k}) / \Delta_x, \quad i < n_x - 1,
 
 and :math:`(D_x f)_{c,n_x-1,j,k} = 0` (the last difference is zero), likewise along y and z.
-The operators wrap :class:`pylops.FirstDerivative` (``kind="forward"``), whose adjoint is exact.
+One :class:`ForwardDifferences` operator computes the differences along any of the axes with
+NumPy slices, and its exact adjoint likewise. It is :class:`pylops.FirstDerivative`
+(``kind="forward"``, ``edge=False``) stacked over the axes, in one pass per axis over the
+array instead of pylops' generic loops and a stack's concatenation: at 60³ voxels × 4 fields in
+float32, the regularizer's value and gradient took about 50 ms per evaluation through three
+stacked pylops operators (``cProfile``, ``benchmarks/bench_regularizer.py``).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from operators.adapters import aslinearoperator
 from operators.base import LinearOperator
-from operators.combinators import vstack
-from operators.pylops_import import pylops
 
 _AXES = {"x": 1, "y": 2, "z": 3}
 
@@ -35,6 +37,67 @@ def _spacing(spacing) -> tuple[float, float, float]:
     if len(spacing) != 3 or min(spacing) <= 0:
         raise ValueError(f"spacing must be a positive scalar or (dx, dy, dz) in m, got {spacing}")
     return spacing
+
+
+class ForwardDifferences(LinearOperator):
+    r"""Forward differences of ``(n_fields, nx, ny, nz)`` fields along some spatial axes.
+
+    Parameters
+    ----------
+    dims : tuple of 4 int
+        ``(n_fields, nx, ny, nz)``.
+    axes : str
+        Directions in output order, a subset of ``"xyz"`` (e.g. ``"xyz"``, ``"y"``).
+    spacing : float or tuple of 3 float, optional
+        Grid spacing in m, scalar or ``(dx, dy, dz)`` (default 1).
+    stacked : bool, optional
+        Output ``(len(axes), *dims)`` (default); False, with one axis: ``dims``.
+    dtype : numpy dtype, optional
+        Operator dtype (default float64).
+    name : str, optional
+        Label for messages.
+    """
+
+    def __init__(self, dims, axes: str, spacing=1.0, stacked: bool = True,
+                 dtype=np.float64, name: str | None = None):
+        dims = _check_dims(dims)
+        bad = [a for a in axes if a not in _AXES]
+        if not axes or bad or len(set(axes)) != len(axes):
+            raise ValueError(f"axis must be one of 'x', 'y', 'z' (each at most once), got "
+                             f"{axes!r}")
+        if not stacked and len(axes) != 1:
+            raise ValueError(f"an unstacked output holds one direction; got axes {axes!r}")
+        steps = _spacing(spacing)
+        self.axes = tuple(_AXES[a] for a in axes)
+        self.inverse_steps = tuple(1.0 / steps[axis - 1] for axis in self.axes)
+        self.stacked = bool(stacked)
+        super().__init__(dims, (len(axes), *dims) if stacked else dims, dtype=dtype,
+                         name=name or f"D_{axes}")
+
+    @staticmethod
+    def _ends(axis: int) -> tuple[tuple[slice, ...], tuple[slice, ...]]:
+        """Index of all but the last layer along ``axis``, and of all but the first."""
+        lower, upper = [slice(None)] * 4, [slice(None)] * 4
+        lower[axis], upper[axis] = slice(None, -1), slice(1, None)
+        return tuple(lower), tuple(upper)
+
+    def _forward(self, x):
+        out = np.zeros((len(self.axes), *self.dims), np.result_type(x, self.dtype))
+        for d, axis, scale in zip(out, self.axes, self.inverse_steps, strict=True):
+            lower, upper = self._ends(axis)
+            np.subtract(x[upper], x[lower], out=d[lower])
+            d[lower] *= scale
+        return out if self.stacked else out[0]
+
+    def _adjoint(self, y):
+        y = y if self.stacked else y[None]
+        out = np.zeros(self.dims, np.result_type(y, self.dtype))
+        for d, axis, scale in zip(y, self.axes, self.inverse_steps, strict=True):
+            lower, upper = self._ends(axis)
+            scaled = d[lower] * scale
+            out[lower] -= scaled
+            out[upper] += scaled
+        return out
 
 
 def derivative(dims, axis: str, spacing=1.0, dtype=np.float64) -> LinearOperator:
@@ -56,13 +119,9 @@ def derivative(dims, axis: str, spacing=1.0, dtype=np.float64) -> LinearOperator
     LinearOperator
         ``(n_fields, nx, ny, nz) -> (n_fields, nx, ny, nz)``, in units of 1/m times the field's.
     """
-    dims = _check_dims(dims)
     if axis not in _AXES:
         raise ValueError(f"axis must be one of 'x', 'y', 'z', got {axis!r}")
-    step = _spacing(spacing)[_AXES[axis] - 1]
-    op = pylops.FirstDerivative(dims, axis=_AXES[axis], sampling=step, kind="forward",
-                                edge=False, dtype=dtype)
-    return aslinearoperator(op, name=f"D_{axis}")
+    return ForwardDifferences(dims, axis, spacing, stacked=False, dtype=dtype)
 
 
 def D_x(dims, spacing=1.0, dtype=np.float64) -> LinearOperator:  # noqa: N802
@@ -97,4 +156,4 @@ def Gradient(dims, spacing=1.0, dtype=np.float64) -> LinearOperator:  # noqa: N8
     LinearOperator
         ``(n_fields, nx, ny, nz) -> (3, n_fields, nx, ny, nz)``, directions in order x, y, z.
     """
-    return vstack([derivative(dims, a, spacing, dtype) for a in "xyz"], name="Gradient")
+    return ForwardDifferences(dims, "xyz", spacing, dtype=dtype, name="Gradient")

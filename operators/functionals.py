@@ -23,6 +23,9 @@ from operators.derivatives import Gradient
 class Functional:
     """A scalar function of an array, with gradient and proximal map.
 
+    Values are summed in float64 whatever the array's precision; gradients and proximal maps
+    keep the array's dtype.
+
     Parameters
     ----------
     scale : float, optional
@@ -61,7 +64,8 @@ class SquaredL2(Functional):
 
     def __call__(self, x) -> float:
         r = self._residual(np.asarray(x))
-        return self.scale * float(np.vdot(r, r).real)
+        squares = (r * r.conj()).real if np.iscomplexobj(r) else r * r
+        return self.scale * float(squares.sum(dtype=np.float64))
 
     def grad(self, x) -> np.ndarray:
         return 2.0 * self.scale * self._residual(np.asarray(x))
@@ -98,11 +102,12 @@ class L1(Functional):
         self.smoothing = float(smoothing)
 
     def __call__(self, x) -> float:
-        a = np.abs(np.asarray(x, dtype=np.float64))
+        a = np.abs(np.asarray(x))
         if self.smoothing == 0:
-            return self.scale * float(a.sum())
+            return self.scale * float(a.sum(dtype=np.float64))
         eps = self.smoothing
-        return self.scale * float(np.where(a <= eps, a * a / (2 * eps), a - eps / 2).sum())
+        return self.scale * float(np.where(a <= eps, a * a / (2 * eps), a - eps / 2).sum(
+            dtype=np.float64))
 
     def grad(self, x) -> np.ndarray:
         x = np.asarray(x)

@@ -21,7 +21,8 @@ from invflame.representations.whitening import whitened
 REGULARIZERS = ("none", "tikhonov", "tv")
 
 
-def regularizer_for(kind: str, grid: VoxelGrid, n_fields: int = 4, tv_smoothing: float = 0.0):
+def regularizer_for(kind: str, grid: VoxelGrid, n_fields: int = 4, tv_smoothing: float = 0.0,
+                    dtype=np.float64):
     r"""The voxel regularizer Φ on normalized fields, as an ``operators.Composite`` or None.
 
     Parameters
@@ -36,6 +37,10 @@ def regularizer_for(kind: str, grid: VoxelGrid, n_fields: int = 4, tv_smoothing:
     tv_smoothing : float, optional
         Huber smoothing of TV's absolute values (:func:`operators.total_variation`), in 1/m
         (normalized field per metre); 0 (default): exact TV.
+    dtype : numpy dtype, optional
+        Of the differences (default float64); a voxel problem takes its forward map's, so that
+        float32 parameters are not differenced in float64. The value is summed in float64
+        either way.
     """
     if kind not in REGULARIZERS:
         raise ValueError(f"unknown regularizer {kind!r}; choose one of {', '.join(REGULARIZERS)}")
@@ -43,8 +48,8 @@ def regularizer_for(kind: str, grid: VoxelGrid, n_fields: int = 4, tv_smoothing:
         return None
     dims = (n_fields, *grid.shape)
     if kind == "tikhonov":
-        return op.tikhonov(dims, tuple(grid.spacing))
-    return op.total_variation(dims, tuple(grid.spacing), smoothing=tv_smoothing)
+        return op.tikhonov(dims, tuple(grid.spacing), dtype)
+    return op.total_variation(dims, tuple(grid.spacing), dtype, smoothing=tv_smoothing)
 
 
 class VoxelRepresentation(Representation):
@@ -119,7 +124,7 @@ class VoxelRepresentation(Representation):
         forward, data = whitened(self.forward, data, sigma)
         return solvers.Problem(
             forward, data, regularizer=regularizer_for(regularizer, self.grid, self.dims[0],
-                                                       self.tv_smoothing),
+                                                       self.tv_smoothing, self.forward.dtype),
             lam=lam,
             lower=self.lower, upper=self.upper, x0=x0,
             name=f"voxel/{regularizer}",

@@ -4,6 +4,8 @@ import numpy as np
 import pytest
 
 import operators as op
+from operators.derivatives import ForwardDifferences
+from operators.pylops_import import pylops
 
 DIMS = (2, 5, 4, 3)  # non-cubic on purpose
 SPACING = (0.1, 0.25, 0.5)
@@ -24,6 +26,28 @@ def test_forward_differences_with_zero_last_difference():
     np.testing.assert_allclose(g[1, :, :, :-1], np.diff(f, axis=2) / 0.25, rtol=1e-12)
     np.testing.assert_allclose(g[2, :, :, :, :-1], np.diff(f, axis=3) / 0.5, rtol=1e-12)
     assert not g[0, :, -1].any() and not g[1, :, :, -1].any() and not g[2, ..., -1].any()
+
+
+@pytest.mark.parametrize("axes", ["xyz", "zx", "y"])
+def test_the_differences_are_pylops_forward_first_derivatives(axes):
+    rng = np.random.default_rng(1)
+    f, w = rng.standard_normal(DIMS), rng.standard_normal((len(axes), *DIMS))
+    ours = ForwardDifferences(DIMS, axes, SPACING)
+    theirs = [pylops.FirstDerivative(DIMS, axis=i + 1, sampling=SPACING[i], kind="forward",
+                                     edge=False) for i in map("xyz".index, axes)]
+    np.testing.assert_allclose(ours(f), np.stack([d @ f.ravel() for d in theirs]).reshape(
+        w.shape), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(ours.adjoint(w), sum(d.H @ wi.ravel() for d, wi in zip(
+        theirs, w, strict=True)).reshape(DIMS), rtol=1e-12, atol=1e-12)
+
+
+def test_float32_fields_stay_float32_and_values_sum_in_float64():
+    f = np.random.default_rng(2).standard_normal(DIMS).astype(np.float32)
+    G = op.Gradient(DIMS, SPACING, np.float32)
+    assert G(f).dtype == np.float32 and G.adjoint(G(f)).dtype == np.float32
+    g = G(f)
+    assert op.L1()(g) == pytest.approx(np.abs(g.astype(np.float64)).sum(), rel=1e-12)
+    assert op.SquaredL2()(g) == pytest.approx(np.sum(g.astype(np.float64) ** 2), rel=1e-6)
 
 
 def test_linear_ramp_has_constant_gradient():
@@ -99,3 +123,7 @@ def test_bad_dims_and_spacing():
         op.Gradient(DIMS, (0.1, -1, 1))
     with pytest.raises(ValueError, match="axis"):
         op.derivative(DIMS, "w")
+    with pytest.raises(ValueError, match="each at most once"):
+        ForwardDifferences(DIMS, "xx")
+    with pytest.raises(ValueError, match="one direction"):
+        ForwardDifferences(DIMS, "xy", stacked=False)
