@@ -120,12 +120,13 @@ class TorchOperator(_FunctionOperator):
     dtype : numpy dtype, optional
         float32 or float64 (default); the input tensor gets the matching torch dtype.
     device : str or torch.device, optional
-        Where ``fun`` runs (default CPU).
+        Where ``fun`` runs (default: torch's default device, the CPU unless
+        :func:`torch.set_default_device` chose another).
     name : str, optional
         Label for messages.
     """
 
-    def __init__(self, fun, dims, dimsd, dtype=np.float64, device="cpu", name=None):
+    def __init__(self, fun, dims, dimsd, dtype=np.float64, device=None, name=None):
         from operators.torch_operator import TorchFunction
 
         super().__init__(TorchFunction(fun, dtype, device), dims, dimsd, dtype,

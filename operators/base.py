@@ -201,7 +201,7 @@ class Operator:
         return _registered.JaxOperator(fun, dims, dimsd, dtype=dtype, name=name)
 
     @staticmethod
-    def from_torch(fun, dims, dimsd, dtype=np.float64, device="cpu", name=None) -> Operator:
+    def from_torch(fun, dims, dimsd, dtype=np.float64, device=None, name=None) -> Operator:
         """Wrap a torch function; see :class:`~operators.adapters.TorchOperator`."""
         return _registered.TorchOperator(fun, dims, dimsd, dtype=dtype, device=device,
                                          name=name)

@@ -19,8 +19,9 @@ class TorchFunction:
         Function of one tensor.
     dtype : numpy dtype
         float32 or float64: the tensors get the matching torch dtype.
-    device : str or torch.device
-        Where ``fun`` runs.
+    device : str, torch.device or None
+        Where ``fun`` runs; None: torch's default device when the function is built (the CPU
+        unless :func:`torch.set_default_device` chose another).
     """
 
     def __init__(self, fun, dtype, device):
@@ -29,7 +30,7 @@ class TorchFunction:
             raise ValueError(f"TorchOperator supports float32 and float64, got {dtype}")
         self.fun = fun
         self.dtype = TORCH_DTYPES[dtype]
-        self.device = torch.device(device)
+        self.device = torch.get_default_device() if device is None else torch.device(device)
 
     def _in(self, x):
         return to_torch(x, dtype=self.dtype, device=self.device)

@@ -5,11 +5,11 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
-import importlib.metadata
 from pathlib import Path
 
 import numpy as np
 
+import invflame
 import solvers
 from invflame.atomic_files import read_json
 from invflame.experiments import config as configuration
@@ -93,7 +93,7 @@ def run_fingerprint(cfg: dict, truth: Field | None, measurement: Measurement | N
     -------
     dict
         ``truth sha256`` and ``data sha256`` (content hashes of the truth's values and of the
-        measured spectra with σ), ``invflame version`` (the installed package's) and
+        measured spectra with σ), ``invflame version`` (``invflame.__version__``) and
         ``solver options`` (the solver's options dataclass: each field with its type and
         default).
     """
@@ -102,7 +102,7 @@ def run_fingerprint(cfg: dict, truth: Field | None, measurement: Measurement | N
         "truth sha256": None if truth is None else _content_hash(truth.values),
         **({} if measurement is None else
            {"data sha256": _content_hash(measurement.data, measurement.sigma)}),
-        "invflame version": importlib.metadata.version("invflame"),
+        "invflame version": invflame.__version__,
         "solver options": f"{options.__module__}.{options.__qualname__}("
                           + ", ".join(f"{f.name}: {f.type} = {f.default!r}"
                                       for f in dataclasses.fields(options)) + ")",

@@ -192,12 +192,17 @@ class FieldNetwork(torch.nn.Module):
 
 
 def _linear(n_in: int, n_out: int, generator: torch.Generator, dtype) -> torch.nn.Linear:
-    """A linear layer with PyTorch's default (Kaiming-uniform) initialization, seeded."""
+    """A linear layer with PyTorch's default (Kaiming-uniform) initialization, seeded.
+
+    The layer is made on torch's default device; its weights are drawn on the CPU by
+    ``generator`` (a CPU generator), so that a seed gives the same network on every device.
+    """
     layer = torch.nn.Linear(n_in, n_out, dtype=dtype)
     bound = 1.0 / np.sqrt(n_in)
     with torch.no_grad():
-        layer.weight.uniform_(-bound, bound, generator=generator)
-        layer.bias.uniform_(-bound, bound, generator=generator)
+        for p in (layer.weight, layer.bias):
+            p.copy_(torch.empty(p.shape, dtype=dtype, device="cpu").uniform_(
+                -bound, bound, generator=generator))
     return layer
 
 
@@ -253,7 +258,8 @@ def pretrain(network: FieldNetwork, target, iterations: int = 2000, lr: float = 
     optimizer = torch.optim.Adam(network.parameters(), lr=lr)
     losses = np.empty(int(iterations))
     for k in tqdm(range(int(iterations)), disable=not progress, desc="pretrain neural field"):
-        index = torch.randperm(points.shape[0], generator=generator)[:batch]
+        index = torch.randperm(points.shape[0], generator=generator,
+                               device="cpu")[:batch].to(points.device)
         optimizer.zero_grad()
         loss = torch.mean((network.normalized(points[index]) - u_target[:, index]) ** 2)
         loss.backward()
