@@ -8,8 +8,9 @@ as the ``invflame`` command sets it (:func:`invflame.process_memory.configure_ma
 glibc's defaults with ``--default-allocator``): builds
 :meth:`invflame.scene.Scene.paper`, makes its data with the forward map, compiles the value and
 gradient of the least-squares misfit ``0.5 ||H(f) - g||²`` and runs ``--epochs`` of it. Prints
-the process's peak resident set size (MiB) after each step, and the
-mean wall time of an epoch.
+the process's peak resident set size (MiB) after each step, the
+mean wall time of an epoch and, on an accelerator, its peak memory
+(:func:`accelerator.device_peaks`).
 ``benchmarks/bench_rte.py`` runs it in a process of its own: its own rows compile many other
 programs, which a reconstruction does not hold.
 """
@@ -21,6 +22,7 @@ from pathlib import Path
 
 import jax
 import jax.numpy as jnp
+from accelerator import device_peaks
 from allocator import add_argument, apply
 
 from invflame.phantoms.registry import make_phantom
@@ -68,7 +70,7 @@ def main() -> None:
 
     gradient = jax.jit(jax.value_and_grad(misfit)).lower(fields).compile()
     steps["gradient compiled"] = peak_mib()
-    jax.block_until_ready(gradient(fields))  # the host sweeps compile on their first call
+    jax.block_until_ready(gradient(fields))
     steps["first epoch"] = peak_mib()
     start = time.perf_counter()
     for _ in range(args.epochs):
@@ -77,7 +79,8 @@ def main() -> None:
     steps[f"{args.epochs} epochs"] = peak_mib()
     print(f"peak resident memory of a voxel reconstruction ({allocator}): "
           + ", ".join(f"{m:.0f} MiB {step}" for step, m in steps.items())
-          + f"; {epoch:.2f} s per epoch (wall)")
+          + f"; {epoch:.2f} s per epoch (wall)"
+          + (f"; peak accelerator memory {peaks}" if (peaks := device_peaks()) else ""))
 
 
 if __name__ == "__main__":

@@ -25,10 +25,12 @@ long (1.10 against 0.55 s for the batch at 32 + 32 samples per ray). Peak reside
 read after the neural-field epochs, before the voxel epochs run. The paper reports 479–493 ms
 per epoch and 65–66 MB on a GPU for its neural field (Tricard, Chen & Deng 2026, Table 1). The
 C allocator is set as the ``invflame`` command sets it (glibc's defaults with
-``--default-allocator``; ``benchmarks/allocator.py``).
+``--default-allocator``; ``benchmarks/allocator.py``). With ``--torch-device cuda`` the neural
+field's tensors live on the GPU (``benchmarks/accelerator.py``), the stages are timed after
+the GPU finished them, and the accelerators' peak memory is printed beside the resident one.
 
     python benchmarks/bench_neural.py [--rays-per-pixel 9] [--batches N] [--centres]
-        [--default-allocator]
+        [--default-allocator] [--torch-device cuda]
 """
 
 import argparse
@@ -37,6 +39,7 @@ import resource
 import time
 from functools import partial
 
+import accelerator
 import numpy as np
 import torch
 from allocator import add_argument, apply
@@ -65,6 +68,7 @@ class Clock:
         """Run ``fn(*args)`` and add its wall and CPU time to ``label``; return its value."""
         wall, cpu = time.perf_counter(), time.process_time()
         out = fn(*args)
+        accelerator.synchronize()
         spent = np.array([time.perf_counter() - wall, time.process_time() - cpu])
         self.seconds[label] = self.seconds.get(label, 0.0) + spent
         return out
@@ -165,15 +169,18 @@ def main():
     parser.add_argument("--centres", action="store_true",
                         help="also time the neural-centres representation")
     add_argument(parser)
+    accelerator.add_argument(parser)
     args = parser.parse_args()
     allocator = apply(args.default_allocator)
+    devices = accelerator.apply(args.torch_device)
 
     scene = Scene.paper(rays_per_pixel=args.rays_per_pixel)
     truth = synthetic_plume(scene.grid).values
     data = scene.simulate(truth)
     print(f"scene: {scene.grid.shape} grid, {scene.n_rays} rays x {scene.rays_per_pixel} "
           f"sub-rays, {scene.wavenumber.size} wavenumbers -> {scene.out_wavenumber.size} "
-          f"outputs, {scene.dtype}; {torch.get_num_threads()} torch threads; {allocator}")
+          f"outputs, {scene.dtype}; {torch.get_num_threads()} torch threads; {allocator}; "
+          f"{devices}")
     rep = NeuralFieldRepresentation(scene, n_coarse=args.n_coarse, n_fine=args.n_fine,
                                     batch_rays=args.batch_rays, chunk_rays=args.chunk_rays,
                                     batch_centres=args.batch_centres)
@@ -181,7 +188,7 @@ def main():
     n_batches = rep.iterations_per_epoch
     timed_batches = n_batches if args.batches is None else min(args.batches, n_batches)
     neural = neural_epoch(rep, data, timed_batches, args.repeats)
-    neural_peak = peak_rss_mb()
+    neural_peak, neural_device_peak = peak_rss_mb(), accelerator.device_peaks()
     neural_stages(rep, data)  # a first call takes up to twice as long: not timed
     stages = neural_stages(rep, data)
     voxel = voxel_epoch(scene, data, truth, args.repeats)
@@ -201,6 +208,8 @@ def main():
           f"{neural[1] / voxel[1]:.2f} CPU; kernel segments per epoch "
           f"{samples / segments:.2f}x the voxel map's")
     print(f"  peak resident memory after the neural epochs: {neural_peak:.0f} MB")
+    if neural_device_peak:
+        print(f"  peak accelerator memory after the neural epochs: {neural_device_peak}")
     print(f"  parameter memory: {rep.parameter_bytes(rep.initial_parameters()) / 1e6:.3f} MB"
           f"   [paper, GPU memory: {PAPER_MB}]")
     total = sum(stages.values())
@@ -214,6 +223,8 @@ def main():
         print(f"  neural centres / voxel epoch: {centres[0] / voxel[0]:.2f} wall, "
               f"{centres[1] / voxel[1]:.2f} CPU")
     print(f"peak resident memory of this process: {peak_rss_mb():.0f} MB")
+    if peaks := accelerator.device_peaks():
+        print(f"peak accelerator memory of this process: {peaks}")
 
 
 if __name__ == "__main__":

@@ -7,10 +7,12 @@ as the full comparison (pretraining shortened to ``--pretrain`` steps: it does n
 cost of an epoch), and prints seconds per epoch, parameter memory and the process's peak
 resident memory, next to the paper's Table 1 (GPU, 2000 epochs). The C allocator is set as the
 ``invflame`` command sets it (glibc's defaults with ``--default-allocator``;
-``benchmarks/allocator.py``).
+``benchmarks/allocator.py``). JAX computes on its default backend; ``--torch-device cuda`` puts
+the neural fields on the GPU too, and the accelerators' peak memory is printed
+(``benchmarks/accelerator.py``).
 
     python benchmarks/bench_paper_epoch.py [--epochs 3] [--pretrain 50] [--out DIR] [--all]
-        [--default-allocator]
+        [--default-allocator] [--torch-device cuda]
 """
 
 import argparse
@@ -19,6 +21,7 @@ import sys
 import tempfile
 from pathlib import Path
 
+import accelerator
 from allocator import add_argument, apply
 
 from invflame.experiments import reproduce, runner
@@ -35,16 +38,19 @@ def main():
     parser.add_argument("--all", action="store_true",
                         help="all six methods (default: VG/TV and NN/Tikh.)")
     add_argument(parser)
+    accelerator.add_argument(parser)
     args = parser.parse_args()
     out = args.out or Path(tempfile.mkdtemp(prefix="invflame-paper-epoch-"))
     if args.method is None:
         for method in reproduce.METHODS if args.all else ("VG/TV", "NN/Tikh."):
             subprocess.run([sys.executable, __file__, "--method", method, "--epochs",
                             str(args.epochs), "--pretrain", str(args.pretrain), "--out",
-                            str(out)] + ["--default-allocator"] * args.default_allocator,
+                            str(out), "--torch-device", args.torch_device]
+                           + ["--default-allocator"] * args.default_allocator,
                            check=True)
         return
     allocator = apply(args.default_allocator)
+    devices = accelerator.apply(args.torch_device)
     cfg = reproduce.method_config("paper", args.method)
     cfg["solver"]["iterations"] = args.epochs  # the runner counts a solver's iterations in epochs
     cfg["representation"]["pretrain_iterations"] = args.pretrain
@@ -54,9 +60,9 @@ def main():
     print(f"{args.method:>9}: {summary['seconds_per_epoch']:.2f} s per epoch "
           f"({summary['epochs']:g} epochs, {summary['iterations']} iterations), parameters "
           f"{summary['parameter_memory_mb']:.2f} MB, process peak "
-          f"{summary['peak_memory_mb']:.0f} MB, {allocator}   "
-          f"[paper, GPU: {paper[0]} ms, {paper[1]} MB]",
-          flush=True)
+          f"{summary['peak_memory_mb']:.0f} MB, {allocator}, {devices}"
+          + (f", peak accelerator memory {peaks}" if (peaks := accelerator.device_peaks()) else "")
+          + f"   [paper, GPU: {paper[0]} ms, {paper[1]} MB]", flush=True)
 
 
 if __name__ == "__main__":

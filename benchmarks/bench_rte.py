@@ -30,7 +30,9 @@ the repeats:
 sweeps the padding of each batch (rays sorted by segment count), reported as "swept".
 Peak memory is the process's peak resident set size (``bench_memory.peak_mib``): at the end, once
 the scene was built, and after exp-only, forward and forward+VJP, before anything else is
-built; and XLA's temporary buffers of the compiled forward+VJP. Last, ``bench_memory.py`` runs
+built; XLA's temporary buffers of the compiled forward+VJP; and on an accelerator its peak
+memory over all rows (:func:`accelerator.device_peaks`). On an accelerator time with
+``--clock wall`` (the process's CPU time leaves out the device's). Last, ``bench_memory.py`` runs
 in a process of its own on the same grid, cameras and rays and prints what a voxel
 reconstruction's process holds: scene, data and gradient epochs only. Both processes set the C
 allocator as the ``invflame`` command sets it (glibc's defaults with ``--default-allocator``;
@@ -46,6 +48,7 @@ from pathlib import Path
 import jax
 import jax.numpy as jnp
 import numpy as np
+from accelerator import device_peaks
 from allocator import add_argument, apply
 from bench_memory import peak_mib
 from timing import CLOCKS, best_time
@@ -248,6 +251,8 @@ def main() -> None:
     print(f"peak memory: {peak:.0f} MiB resident ({built:.0f} MiB once the scene was built, "
           f"{epoch_peak:.0f} MiB after forward and forward+VJP); XLA temporaries of "
           f"forward+VJP {temp / 2**20:.0f} MiB")
+    if peaks := device_peaks():
+        print(f"peak accelerator memory (all rows): {peaks}")
     scene_args = ["--cells", str(args.cells), "--pixels", str(args.pixels),
                   "--rays-per-pixel", str(args.rays_per_pixel), "--phantom", args.phantom]
     scene_args += ["--default-allocator"] * args.default_allocator

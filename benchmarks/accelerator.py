@@ -1,0 +1,48 @@
+"""Where a benchmark computes: torch's device for the neural field, and the accelerators'
+peak memory.
+
+JAX computes on its default backend (a GPU where jaxlib has one). The neural field's networks,
+samples and losses are torch tensors made on torch's default device (``--torch-device``); the
+emission kernel then runs on the JAX device those tensors are handed to through DLPack.
+"""
+
+import argparse
+
+import jax
+import torch
+
+
+def add_argument(parser: argparse.ArgumentParser) -> None:
+    """Register ``--torch-device`` on a benchmark's command line."""
+    parser.add_argument("--torch-device", default="cpu",
+                        help="torch device of the neural field (networks, samples, losses), "
+                        "e.g. cuda (default: cpu)")
+
+
+def apply(device: str) -> str:
+    """Make ``device`` torch's default device; returns where the process computes, in words,
+    for the benchmark's output."""
+    torch.set_default_device(device)
+    return f"JAX on {jax.default_backend()}, torch on {torch.get_default_device()}"
+
+
+def synchronize() -> None:
+    """Wait for the work queued on torch's CUDA device, if torch uses one (before reading a
+    clock)."""
+    if torch.cuda.is_initialized():
+        torch.cuda.synchronize()
+
+
+def device_peaks() -> str:
+    """Peak memory in MiB of each accelerator so far, by framework, in words; empty on CPUs.
+
+    JAX's figure is its allocator's ``peak_bytes_in_use`` (what was in use, not what it
+    reserved ahead); torch's is ``torch.cuda.max_memory_allocated``.
+    """
+    peaks = [f"JAX {device} {stats['peak_bytes_in_use'] / 2**20:.0f} MiB"
+             for device in jax.local_devices()
+             if (stats := device.memory_stats()) and "peak_bytes_in_use" in stats]
+    if torch.cuda.is_initialized():
+        peaks.append(f"torch {torch.cuda.get_device_name()} "
+                     f"{torch.cuda.max_memory_allocated() / 2**20:.0f} MiB")
+    return ", ".join(peaks)
