@@ -96,7 +96,16 @@ def _checked(path: str, key: Key, value):
             raise _key_error(path, key, f" = {value!r} is not allowed"
                                         f"{_did_you_mean(value, key.choices)}; allowed: "
                                         f"{allowed(key, path)}")
-        return value
+    else:
+        _check_numbers(path, key, value)
+    if key.rule and not key.rule.holds(value):
+        raise _key_error(path, key, f" must be {key.rule.text}, got {value!r}")
+    return value
+
+
+def _check_numbers(path: str, key: Key, value) -> None:
+    """A ConfigError naming ``path`` where ``value`` (a number or a list) is not finite or
+    outside the key's range."""
     values = value if isinstance(value, list) else [value]
     if any(_is_number(v) and not math.isfinite(v) for v in values):
         finite = "finite numbers" if isinstance(value, list) else "a finite number"
@@ -107,9 +116,6 @@ def _checked(path: str, key: Key, value):
         sign = "positive: " if (low or 0) > 0 and value <= 0 else ""
         unit = f" ({key.unit})" if key.unit else ""
         raise _key_error(path, key, f"{unit} must be {sign}{allowed(key, path)}, got {value!r}")
-    if key.rule and not key.rule.holds(value):
-        raise _key_error(path, key, f" must be {key.rule.text}, got {value!r}")
-    return value
 
 
 def _merge(schema: dict[str, Key | Section], given: dict, where: str) -> dict:

@@ -13,6 +13,7 @@
 from __future__ import annotations
 
 import copy
+import re
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
@@ -94,6 +95,8 @@ LOW_HIGH = Rule(lambda r: 0.0 < r[0] < r[1], "[low, high] with 0 < low < high")
 CELLS = ValueType("a list of 3 integers [nx, ny, nz], or [] for 'truth.grid' on every axis",
                   lambda v: isinstance(v, list) and len(v) in (0, 3) and all(
                       isinstance(n, int) and not isinstance(n, bool) for n in v))
+TORCH_DEVICE = Rule(lambda d: re.fullmatch(r"auto|cpu|cuda(:\d+)?", d) is not None,
+                    "'auto', 'cpu', 'cuda' or 'cuda:N' (N: the GPU's index)")
 AT_LEAST_TWO = Rule(lambda cells: all(n >= 2 for n in cells),
                     "[nx, ny, nz] with at least 2 voxels on every axis, or []")
 
@@ -258,6 +261,10 @@ SCHEMA: dict[str, Key | Section] = {
                                     "(a stochastic objective)"),
         "pretrain_iterations": Key(INTEGER, 1000, "networks: iterations fitting the networks to "
                                    "the starting fields before the reconstruction", low=0.0),
+        "device": Key(STRING, "auto", "networks: torch's device for the networks, samples and "
+                      "losses (made the process's default); 'auto': the first CUDA GPU when "
+                      "JAX computes on a GPU and torch has CUDA, else the CPU",
+                      rule=TORCH_DEVICE),
     }),
     "regularizer": Section("the penalty Φ and its weight λ", {
         "kind": Key(STRING, "none", "'tikhonov': mean squared gradient; 'tv': mean absolute "

@@ -3,7 +3,9 @@ physical fields they give."""
 
 from __future__ import annotations
 
+import jax
 import numpy as np
+import torch
 
 from invflame.representations.neural import NeuralCentresRepresentation, NeuralFieldRepresentation
 from invflame.representations.normalization import physical_bounds
@@ -11,11 +13,48 @@ from invflame.representations.voxel import VoxelRepresentation
 from invflame.scene import Scene
 
 
+def torch_device(name: str) -> str:
+    """The torch device that ``representation.device`` names on this machine.
+
+    Parameters
+    ----------
+    name : str
+        ``"auto"``, ``"cpu"``, ``"cuda"`` or ``"cuda:N"``.
+
+    Returns
+    -------
+    str
+        ``"auto"`` resolved: ``"cuda"`` when JAX computes on a GPU and torch has CUDA, else
+        ``"cpu"``; any other name as given.
+
+    Raises
+    ------
+    ValueError
+        For a CUDA device where torch has no CUDA or JAX no GPU (the networks hand their
+        tensors to the emission kernel, which JAX runs, without a copy).
+    """
+    jax_on_gpu = jax.default_backend() == "gpu"
+    if name == "auto":
+        return "cuda" if jax_on_gpu and torch.cuda.is_available() else "cpu"
+    if name.startswith("cuda") and not (jax_on_gpu and torch.cuda.is_available()):
+        raise ValueError(
+            f"representation.device = {name!r}, but here torch {torch.__version__} "
+            f"{'has' if torch.cuda.is_available() else 'has no'} CUDA and JAX computes on "
+            f"{jax.default_backend()}: both need the GPU (a CUDA build of torch and "
+            "jax[cuda13]); or set device = 'auto' or 'cpu'")
+    return name
+
+
 def make_representation(cfg: dict, scene: Scene):
-    """The representation named by ``representation.kind`` on the scene."""
+    """The representation named by ``representation.kind`` on the scene; for the networks,
+    torch's default device set to ``representation.device`` first (:func:`torch_device`)."""
     settings, kind = cfg["representation"], cfg["representation"]["kind"]
     network = {"n_frequencies": settings["frequencies"], "hidden": settings["hidden"],
                "depth": settings["depth"], "seed": cfg["seed"]}
+    if kind != "voxel":
+        device = torch.device(torch_device(settings["device"]))
+        if device != torch.get_default_device():
+            torch.set_default_device(device)
     if kind == "neural-field":
         return NeuralFieldRepresentation(scene, n_coarse=settings["coarse_samples"],
                                          n_fine=settings["fine_samples"],

@@ -64,6 +64,8 @@ def test_defaults_and_partial_override(tmp_path):
         ("[regularizer]\nlambda_range = [1e-3, inf]\n",
          r"'regularizer.lambda_range' must be finite numbers, got \[0.001, inf\]"),
         ("[data]\ninverse_crime = 1\n", r"'data.inverse_crime' must be true or false, got 1"),
+        ("[representation]\ndevice = 'gpu'\n", r"'representation.device' must be 'auto', "
+                                              r"'cpu', 'cuda' or 'cuda:N' .*got 'gpu'"),
         ("[init]\nnoise = -0.1\n", r"'init.noise' \(fraction of each field's range\) must be in "
                                  r"\[0, 1\] \(the paper's 0.2\), got -0.1"),
     ],
@@ -111,3 +113,18 @@ def test_hot_volume_ratio_flags_a_lost_flame():
     assert hot_volume_ratio(truth, np.full_like(truth, 300.0)) == 0.0
     with pytest.raises(ValueError, match="no voxel above"):
         hot_volume_ratio(np.full_like(truth, 300.0), truth)
+
+
+def test_the_networks_device_resolves_here_or_says_what_is_missing():
+    import jax
+    import torch
+
+    from invflame.experiments.parameters import torch_device
+
+    on_gpu = jax.default_backend() == "gpu" and torch.cuda.is_available()
+    assert torch_device("auto") == ("cuda" if on_gpu else "cpu")
+    assert torch_device("cpu") == "cpu"
+    if not on_gpu:
+        with pytest.raises(ValueError, match=r"representation.device = 'cuda:1', but here torch "
+                                             r".* both need the GPU .* or set device = 'auto'"):
+            torch_device("cuda:1")
