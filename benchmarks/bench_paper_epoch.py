@@ -54,6 +54,7 @@ def main():
     cfg = reproduce.method_config("paper", args.method)
     cfg["solver"]["iterations"] = args.epochs  # the runner counts a solver's iterations in epochs
     cfg["representation"]["pretrain_iterations"] = args.pretrain
+    cfg["representation"]["device"] = args.torch_device
     summary = runner.run_experiment(cfg, out / reproduce.folder_name(args.method),
                                     progress=False)
     paper = reproduce.PAPER_TABLE[args.method]
