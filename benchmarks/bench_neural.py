@@ -151,6 +151,10 @@ def seconds(t) -> str:
     return f"{t[0]:7.2f} s wall {t[1]:7.2f} s CPU"
 
 
+def milliseconds(t) -> str:
+    return f"{1e3 * t[0]:7.1f} ms wall {1e3 * t[1]:7.1f} ms CPU"
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--rays-per-pixel", type=int, default=9, help="sub-rays per pixel")
@@ -213,9 +217,9 @@ def main():
     print(f"  parameter memory: {rep.parameter_bytes(rep.initial_parameters()) / 1e6:.3f} MB"
           f"   [paper, GPU memory: {PAPER_MB}]")
     total = sum(stages.values())
-    print(f"  stages of one batch (in sequence, {seconds(total)}):")
+    print(f"  stages of one batch (in sequence, {milliseconds(total)}):")
     for label, t in stages.items():
-        print(f"    {label:<40} {seconds(t)}   {100 * t[1] / total[1]:4.0f} % CPU")
+        print(f"    {label:<40} {milliseconds(t)}   {100 * t[1] / total[1]:4.0f} % CPU")
     if args.centres:
         centres = centres_epoch(scene, data, args.repeats)
         print(f"neural centres: epoch (objective + gradient, best of {args.repeats}): "
