@@ -6,8 +6,9 @@
 #
 # Runs, at the paper configuration (60³ voxels, four cameras of 32×32 pixels, one ray per
 # pixel, 1876 wavenumbers): bench_rte.py (the kernel against exp-only, wall clock),
-# bench_neural.py (the neural field's epoch against the voxel one, torch on the GPU) and
-# bench_paper_epoch.py (the paper preset's VG/TV and NN/Tikh. through the runner). Each one's
+# bench_neural.py (the neural field's epoch against the voxel one, torch on the GPU),
+# bench_paper_epoch.py (the paper preset's VG/TV and NN/Tikh. through the runner) and
+# bench_regularizer.py (the voxel regularizers on the host's CPU). Each one's
 # output goes to the terminal and to LOG_DIR/NAME.log (default LOG_DIR: results/gpu); one that
 # fails or runs past its limit (seconds, below) is reported and the next one runs. JAX does
 # not reserve most of the GPU ahead (XLA_PYTHON_CLIENT_PREALLOCATE=false), so that torch has
@@ -35,3 +36,4 @@ run rte 200 bench_rte.py --rays-per-pixel 1 --repeats 5 --clock wall
 run neural 150 bench_neural.py --rays-per-pixel 1 --n-coarse 32 --n-fine 32 --repeats 3 \
     --centres --torch-device cuda
 run paper_epoch 180 bench_paper_epoch.py --epochs 3 --torch-device cuda
+run regularizer 60 bench_regularizer.py
