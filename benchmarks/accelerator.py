@@ -11,18 +11,26 @@ import argparse
 import jax
 import torch
 
+from invflame.experiments.parameters import torch_device
+
 
 def add_argument(parser: argparse.ArgumentParser) -> None:
     """Register ``--torch-device`` on a benchmark's command line."""
     parser.add_argument("--torch-device", default="cpu",
-                        help="torch device of the neural field (networks, samples, losses), "
-                        "e.g. cuda (default: cpu)")
+                        help="torch device of the neural field (networks, samples, losses): "
+                        "auto, cpu, cuda or cuda:N (default: cpu)")
 
 
 def apply(device: str) -> str:
-    """Make ``device`` torch's default device; returns where the process computes, in words,
-    for the benchmark's output."""
-    torch.set_default_device(device)
+    """Make ``device`` (as ``representation.device`` takes it,
+    :func:`invflame.experiments.parameters.torch_device`) torch's default device; returns
+    :func:`describe`."""
+    torch.set_default_device(torch_device(device))
+    return describe()
+
+
+def describe() -> str:
+    """Where the process computes, in words, for the benchmark's output."""
     return f"JAX on {jax.default_backend()}, torch on {torch.get_default_device()}"
 
 

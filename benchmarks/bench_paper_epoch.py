@@ -50,7 +50,6 @@ def main():
                            check=True)
         return
     allocator = apply(args.default_allocator)
-    devices = accelerator.apply(args.torch_device)
     cfg = reproduce.method_config("paper", args.method)
     cfg["solver"]["iterations"] = args.epochs  # the runner counts a solver's iterations in epochs
     cfg["representation"]["pretrain_iterations"] = args.pretrain
@@ -61,7 +60,7 @@ def main():
     print(f"{args.method:>9}: {summary['seconds_per_epoch']:.2f} s per epoch "
           f"({summary['epochs']:g} epochs, {summary['iterations']} iterations), parameters "
           f"{summary['parameter_memory_mb']:.2f} MB, process peak "
-          f"{summary['peak_memory_mb']:.0f} MB, {allocator}, {devices}"
+          f"{summary['peak_memory_mb']:.0f} MB, {allocator}, {accelerator.describe()}"
           + (f", peak accelerator memory {peaks}" if (peaks := accelerator.device_peaks()) else "")
           + f"   [paper, GPU: {paper[0]} ms, {paper[1]} MB]", flush=True)
 
