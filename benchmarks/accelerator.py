@@ -11,6 +11,7 @@ import argparse
 import jax
 import torch
 
+from invflame.experiments.machine import describe_machine, in_words
 from invflame.experiments.parameters import torch_device
 
 
@@ -30,8 +31,9 @@ def apply(device: str) -> str:
 
 
 def describe() -> str:
-    """Where the process computes, in words, for the benchmark's output."""
-    return f"JAX on {jax.default_backend()}, torch on {torch.get_default_device()}"
+    """Where the process computes, in words, for the benchmark's output
+    (:func:`invflame.experiments.machine.in_words`)."""
+    return in_words(describe_machine(uses_torch=True))
 
 
 def synchronize() -> None:

@@ -53,6 +53,7 @@ from allocator import add_argument, apply
 from bench_memory import peak_mib
 from timing import CLOCKS, best_time
 
+from invflame.experiments.machine import processor
 from invflame.phantoms.registry import make_phantom
 from invflame.scene import Scene
 from operators import rte_kernel
@@ -237,7 +238,7 @@ def main() -> None:
     peak = peak_mib()
 
     print(f"backend {jax.default_backend()}, {jax.device_count()} device(s), {args.clock} "
-          f"time, best of {args.repeats}, {allocator}")
+          f"time, best of {args.repeats}, {allocator}; processor {processor()}")
     print(f"grid {scene.grid.shape}, {scene.n_rays} pixels x {args.rays_per_pixel} rays, "
           f"{seg.n_segments} segments (max {seg.max_segments}/ray), {n_eta} wavenumbers, "
           f"{len(scene.tables.species)} absorbing species, {scene.tables.nodes.size} T nodes")

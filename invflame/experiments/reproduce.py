@@ -43,6 +43,7 @@ from pathlib import Path
 from invflame.atomic_files import read_json, write_csv, write_json, write_text
 from invflame.experiments import config as configuration
 from invflame.experiments.initialization import ambient
+from invflame.experiments.machine import in_words
 from invflame.experiments.metrics import field_scores, smoothed
 from invflame.field import Field
 
@@ -201,6 +202,7 @@ def table_rows(summaries: dict[str, dict]) -> list[dict]:
             "MSE_T_initial": start_t,
             "improvement_T": start_t / summary["mse"]["T"] if summary["mse"]["T"] > 0 else None,
             "epoch_ms": None if seconds is None else round(1e3 * seconds, 1),
+            "machine": in_words(summary.get("machine")),
             "param_mem_MB": round(summary["parameter_memory_mb"], 2),
             "paper_epoch_ms": paper[0],
             "paper_mem_MB": paper[1],
@@ -271,6 +273,11 @@ def markdown_table(rows: list[dict], baselines: list[dict], preset: str, protoco
             f"| *{b['method']}* ({b['kind']}) | – | – | – | – | {_cell(b['MSE_T'])} | "
             f"{_cell(b['MSE_T_flame'])} | {_cell(b['MSE_CO2'])} | {_cell(b['MSE_H2O'])} | "
             f"{_cell(b['hot_volume_ratio'], '.2f')} | – | – | – | – |")
+    machines = {}
+    for r in rows:
+        machines.setdefault(r["machine"], []).append(r["method"])
+    lines += ["", "Epoch times measured on:",
+              *(f"- {', '.join(methods)}: {machine}" for machine, methods in machines.items())]
     return "\n".join(lines) + "\n"
 
 

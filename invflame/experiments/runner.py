@@ -5,6 +5,8 @@ r"""One reconstruction from a configuration: scene, data, representation, solver
 ====================== ======================================================================
 ``config.toml``        the complete configuration (defaults filled in) with its seed
 ``summary.json``       metrics (normalized MSE and PSNR per field, time per iteration, memory)
+                       and the machine that computed them
+                       (:func:`~invflame.experiments.machine.describe_machine`)
 ``history.csv``        per-iteration loss, data misfit, regularizer, gradient norm, wall time
 ``truth.npz``          ground truth on the reconstruction grid (:class:`invflame.field.Field`)
 ``initial.npz``        starting fields (for a neural field: the pretrained network's)
@@ -56,6 +58,7 @@ from invflame.experiments import config as configuration
 from invflame.experiments.data_start import band_tomography_start
 from invflame.experiments.initialization import ambient, noisy_truth, with_soot_field
 from invflame.experiments.inputs import absorption_table, load_truth, read_data
+from invflame.experiments.machine import describe_machine, in_words
 from invflame.experiments.measurement import (
     Measurement,
     simulate_measurement,
@@ -305,6 +308,8 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
         start = initial_fields(cfg, truth, scene, measurement)
 
     representation = make_representation(cfg, scene)
+    machine = describe_machine(uses_torch=representation.kind != "voxel")
+    log(f"computing on: {in_words(machine)}")
     x0 = starting_parameters(cfg, representation, start, progress)
     start = physical_fields(scene, representation.fields(x0))
     if truth is None:
@@ -375,6 +380,7 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
         "seconds_per_epoch": None if seconds is None else seconds * per_epoch,
         "parameter_memory_mb": representation.parameter_bytes(result.x) / 1e6,
         "peak_memory_mb": peak_memory_mb(),
+        "machine": machine,
     }
     write_json(summary_path, summary)
     export_run(out)

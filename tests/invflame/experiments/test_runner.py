@@ -1,12 +1,16 @@
 """One reconstruction end to end on a tiny scene: outputs, metrics, resume, bad input."""
 
 import json
+import os
 
+import jax
 import numpy as np
 import pytest
+import torch
 
 import solvers
 from invflame.experiments import config, reproduce, runner
+from invflame.experiments.machine import describe_machine, in_words
 from invflame.field import Field
 
 TINY = {
@@ -67,6 +71,7 @@ def test_reproduce_writes_table_and_figures(tmp_path, monkeypatch):
         assert (tmp_path / name).is_file(), name
     text = (tmp_path / "table.md").read_text()
     assert "| VG/TV |" in text and "Checked on this run" in text
+    assert f"- VG/NR, VG/TV: {in_words(describe_machine())}" in text
     for baseline in ("*start*", "*start smoothed (σ = 1 voxel)*", "*ambient air (flat)*"):
         assert baseline in text
     assert "ground truth + 0.2 relative Gaussian noise" in text  # the paper's start, said
@@ -102,6 +107,8 @@ def test_run_summary_says_what_made_the_result(tmp_path):
     assert set(summary["mse_flame"]) >= {"T", "CO2", "H2O"}
     data = np.load(tmp_path / "data.npz")
     assert data["sigma"].shape == data["out_wavenumber"].shape
+    assert summary["machine"] == describe_machine()  # a voxel run: torch not named
+    assert f"computing on: {in_words(summary['machine'])}" in (tmp_path / "log.txt").read_text()
 
 
 @pytest.mark.parametrize(("solver", "regularizer"), [("gauss-newton", "tikhonov"),
@@ -195,12 +202,41 @@ def test_table_marks_the_lambdas_chosen_from_the_data():
     row = {"method": "VG/TV", "iterations": 5, "converged": True, "chi2_per_measurement": 2.0,
            "MSE_T": 0.01, "MSE_T_flame": 0.1, "MSE_CO2": 0.01, "MSE_H2O": 0.01,
            "hot_volume_ratio": 1.0, "MSE_T_initial": 0.02, "improvement_T": 2.0,
-           "epoch_ms": 10.0, "paper_MSE_T": 0.0121}
+           "epoch_ms": 10.0, "paper_MSE_T": 0.0121, "machine": "not recorded"}
     rows = [dict(row, **{"lambda": 1.0e4, "lambda_from_data": True}),
         dict(row, method="NN/TV", **{"lambda": 30.0, "lambda_from_data": False})]
     text = reproduce.markdown_table(rows, [], "quick", "honest", "poolfire", {})
     assert "| VG/TV | 1e+04* |" in text and "| NN/TV | 30 |" in text
     assert text.startswith("Preset `quick`, protocol `honest`, truth `poolfire`.")
+
+
+def test_table_names_the_machines_of_its_epoch_times():
+    summary = {"config": {"regularizer": {"lambda": 1e-3}}, "lambda": 1e-3, "iterations": 4,
+               "converged": False, "chi2_per_measurement": {"final": 1.0},
+               "mse": {"T": 0.01, "CO2": 0.01, "H2O": 0.01}, "mse_flame": {"T": 0.1},
+               "hot_volume_ratio": 1.0, "mse_initial": {"T": 0.02},
+               "seconds_per_epoch": 0.5, "parameter_memory_mb": 3.5}
+    gpu = {"processor": "a processor, 16 cores", "jax": "gpu: a GPU", "torch": None,
+           "versions": {}}
+    rows = reproduce.table_rows({"VG/NR": dict(summary, machine=gpu),
+                                 "VG/TV": dict(summary, machine=gpu),
+                                 "VG/Tikh.": summary})  # written before runs recorded it
+    assert [r["machine"] for r in rows] == [in_words(gpu), in_words(gpu), "not recorded"]
+    text = reproduce.markdown_table(rows, [], "paper", "paper", "poolfire", {})
+    assert ("Epoch times measured on:\n"
+            "- VG/NR, VG/TV: JAX on gpu: a GPU; processor a processor, 16 cores\n"
+            "- VG/Tikh.: not recorded\n") in text
+
+
+def test_the_machine_is_this_process_s():
+    machine = describe_machine()
+    assert machine["jax"].split(":")[0] == jax.default_backend()
+    assert machine["processor"].endswith(f", {len(os.sched_getaffinity(0))} cores")
+    assert machine["torch"] is None
+    assert machine["versions"]["jax"] == jax.__version__
+    assert describe_machine(uses_torch=True)["torch"] == str(torch.get_default_device())
+    assert "torch on cpu" in in_words(dict(machine, torch="cpu"))
+    assert "torch" not in in_words(machine)
 
 
 def test_tv_smoothing_reaches_the_voxel_problem_and_is_refused_where_it_means_nothing(tmp_path):
