@@ -7,6 +7,7 @@
 # Runs, at the paper configuration (60³ voxels, four cameras of 32×32 pixels, one ray per
 # pixel, 1876 wavenumbers): bench_rte.py (the kernel against exp-only, wall clock),
 # bench_neural.py (the neural field's epoch against the voxel one, torch on the GPU),
+# bench_objective.py (the voxel objective compiled against the operators' methods),
 # bench_paper_epoch.py (the paper preset's VG/TV and NN/Tikh. through the runner) and
 # bench_regularizer.py (the voxel regularizers on the host's CPU). Each one's
 # output goes to the terminal and to LOG_DIR/NAME.log (default LOG_DIR: results/gpu); one that
@@ -35,5 +36,6 @@ torch.__version__, 'CUDA' if torch.cuda.is_available() else 'no CUDA')"
 run rte 200 bench_rte.py --rays-per-pixel 1 --repeats 5 --clock wall
 run neural 150 bench_neural.py --rays-per-pixel 1 --n-coarse 32 --n-fine 32 --repeats 3 \
     --centres --torch-device cuda
+run objective 100 bench_objective.py --repeats 10
 run paper_epoch 180 bench_paper_epoch.py --epochs 3 --torch-device cuda
 run regularizer 60 bench_regularizer.py

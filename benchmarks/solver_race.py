@@ -245,7 +245,7 @@ def build_problems(size: str, protocol: str, regularizers: list[str],
 
 def warm_up(problem: solvers.Problem) -> None:
     """Evaluate F, a JVP and a VJP at the start once, so that no run pays for compiling them."""
-    evaluation = problem.evaluate(problem.x0)
+    evaluation = problem.evaluate(problem.x0, jacobians=True)
     evaluation.forward_jacobian(problem.x0)
     evaluation.grad.sum()
 

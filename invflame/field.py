@@ -59,26 +59,30 @@ def validate_values(values: np.ndarray, grid: VoxelGrid, *, mixture: bool = True
             f"{FIELD_NAMES}, *grid.shape), or {(len(SOOTY_FIELD_NAMES), *grid.shape)} with the "
             f"soot volume fraction last; got {values.shape}"
         )
-    bad = ~np.isfinite(values)
-    if bad.any():
+    axes = tuple(range(1, values.ndim))
+    lows, highs = values.min(axis=axes), values.max(axis=axes)  # NaN and inf show here
+    if not (np.isfinite(lows).all() and np.isfinite(highs).all()):
+        bad = ~np.isfinite(values)
         names = [SOOTY_FIELD_NAMES[i] for i in np.unique(np.nonzero(bad)[0])]
         raise ValueError(f"field values contain NaN or inf in {names} ({int(bad.sum())} entries)")
-    t_min = float(values[0].min())
+    t_min = float(lows[0])
     if t_min <= 0:
         raise ValueError(f"temperature must be > 0 K everywhere; minimum is {t_min} K")
     for i, name in enumerate(SPECIES, start=1):
-        lo, hi = float(values[i].min()), float(values[i].max())
+        lo, hi = float(lows[i]), float(highs[i])
         if lo < 0 or hi > 1:
             raise ValueError(
                 f"mole fraction X_{name} must lie in [0, 1]; got range [{lo}, {hi}] "
                 "(clip round-off before building the field)"
             )
     if len(values) == len(SOOTY_FIELD_NAMES):
-        lo, hi = float(values[-1].min()), float(values[-1].max())
+        lo, hi = float(lows[-1]), float(highs[-1])
         if lo < 0 or hi >= 1:
             raise ValueError(f"soot volume fraction must lie in [0, 1); got range [{lo}, {hi}]")
+    if not mixture:
+        return
     total = float(values[1:len(FIELD_NAMES)].sum(axis=0).max())
-    if mixture and total > 1 + _SUM_TOLERANCE:
+    if total > 1 + _SUM_TOLERANCE:
         raise ValueError(
             f"mole fractions of {SPECIES} must sum to at most 1; maximum sum is {total}"
         )

@@ -9,7 +9,7 @@ it changes nothing in the process: it does not import torch (only building a
 from operators.adapters import JaxOperator, TorchOperator, aslinearoperator
 from operators.algebra import linearize_together  # also registers what ``A @ B`` etc. build
 from operators.averaging import RowMean
-from operators.base import Identity, Jacobian, LinearOperator, Operator, precision
+from operators.base import Identity, Jacobian, JaxMap, LinearOperator, Operator, precision
 from operators.checks import (
     dottest,
     gradient_taylor_test,
@@ -51,6 +51,7 @@ __all__ = [
     "ILSConvolution",
     "Identity",
     "Jacobian",
+    "JaxMap",
     "JaxOperator",
     "L1",
     "LinearOperator",

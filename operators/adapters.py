@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from operators.base import Jacobian, LinearOperator, Operator, register
+from operators.base import Jacobian, JaxMap, LinearOperator, Operator, register
 from operators.jax_operator import JaxFunction
 from operators.pylops_import import pylops
 
@@ -84,7 +84,9 @@ class JaxOperator(_FunctionOperator):
 
     ``jvp`` and ``vjp`` come from :func:`jax.jvp` and :func:`jax.vjp`; all three are jit-compiled
     once per operator. ``linearize`` runs the forward pass once and keeps JAX's pullback, so a
-    solver's value and gradient cost one forward and one reverse pass.
+    solver's value and gradient cost one forward and one reverse pass. Its :meth:`jax_map` is
+    ``fun`` itself, so that it takes part in compiled programs such as
+    :mod:`solvers.compiled_objective`.
 
     Parameters
     ----------
@@ -102,6 +104,10 @@ class JaxOperator(_FunctionOperator):
     def __init__(self, fun, dims, dimsd, dtype=np.float64, name=None):
         super().__init__(JaxFunction(fun, dtype), dims, dimsd, dtype,
                          name or getattr(fun, "__name__", "jax"))
+        self.fun = fun
+
+    def jax_map(self) -> JaxMap:
+        return JaxMap(lambda _, x: self.fun(x))
 
 
 @register

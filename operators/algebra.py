@@ -19,9 +19,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+import jax.numpy as jnp
 import numpy as np
 
-from operators.base import Jacobian, LinearOperator, Operator, _size, register
+from operators.base import Jacobian, JaxMap, LinearOperator, Operator, _size, register
 
 
 def _jacobian_from(op: Operator, x, value, derivative: LinearOperator) -> Jacobian:
@@ -61,6 +62,26 @@ class Composition(Operator):
 
     def _mid(self, y):
         return np.reshape(y, self.outer.dims)
+
+    def jax_map(self) -> JaxMap | None:
+        """The two parts' maps composed, when both have one; the outer part's domain is
+        checked at the inner part's value, computed by the inner operator."""
+        outer, inner = self.outer.jax_map(), self.inner.jax_map()
+        if outer is None or inner is None:
+            return None
+        mid = self.outer.dims
+
+        def function(args, x):
+            return outer.function(args[0], jnp.reshape(inner.function(args[1], x), mid))
+
+        def check(x):
+            if inner.check is not None:
+                inner.check(x)
+            if outer.check is not None:
+                outer.check(self._mid(self.inner(x)))
+
+        checked = inner.check is not None or outer.check is not None
+        return JaxMap(function, (outer.args, inner.args), check if checked else None)
 
     def _forward(self, x):
         return self.outer(self._mid(self.inner(x)))

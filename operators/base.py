@@ -40,9 +40,12 @@ float64 there without turning on ``jax_enable_x64`` for the whole process.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import functools
 import numbers
 import types
+from collections.abc import Callable
+from typing import Any
 
 import jax
 import numpy as np
@@ -94,6 +97,33 @@ def precision(dtype):
     if np.dtype(dtype) == np.float64:
         return jax.enable_x64(True)
     return contextlib.nullcontext()
+
+
+@dataclasses.dataclass(frozen=True)
+class JaxMap:
+    r"""An operator as a function that JAX can trace: :math:`y = F(x)` is
+    ``function(args, x)``.
+
+    Programs built of several operators (:mod:`solvers.compiled_objective`) call these inside
+    one :func:`jax.jit`, so that the whole program runs on JAX's device and JAX differentiates
+    it.
+
+    Attributes
+    ----------
+    function : callable
+        ``function(args, x) -> y``, traceable by JAX, ``x`` of the operator's ``dims`` and
+        ``y`` of its ``dimsd``.
+    args : pytree of jax.Array
+        The operator's constant arrays, passed at every call so that they are not compiled in
+        as constants.
+    check : callable or None
+        ``check(x)`` raises ``ValueError`` for a NumPy point ``x`` outside the operator's
+        domain, as the operator itself would; None when every point is in it.
+    """
+
+    function: Callable
+    args: Any = ()
+    check: Callable | None = None
 
 
 class Operator:
@@ -184,6 +214,12 @@ class Operator:
         """The Jacobian at ``x`` as a linear operator; ``.value`` holds ``F(x)``."""
         x = self._as_input(x)
         return Jacobian(self, x, self(x))
+
+    def jax_map(self) -> JaxMap | None:
+        """This operator as a function JAX can trace (:class:`JaxMap`), or None (the default)
+        for an operator that has none: programs that need one then use its NumPy methods.
+        Its arrays are placed on JAX's device at every call; call it once per program."""
+        return None
 
     def _forward(self, x):
         raise NotImplementedError(f"{self.name} does not implement _forward")
@@ -339,6 +375,9 @@ class Identity(LinearOperator):
 
     def __init__(self, dims, dtype=np.float64):
         super().__init__(dims, dims, dtype=dtype, name="I")
+
+    def jax_map(self) -> JaxMap:
+        return JaxMap(lambda _, x: x)
 
     def _forward(self, x):
         return x

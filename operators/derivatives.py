@@ -7,7 +7,8 @@ On a grid of fields shaped ``(n_fields, nx, ny, nz)`` with spacings :math:`\Delt
 
 and :math:`(D_x f)_{c,n_x-1,j,k} = 0` (the last difference is zero), likewise along y and z.
 One :class:`ForwardDifferences` operator computes the differences along any of the axes with
-NumPy slices, and its exact adjoint likewise. It is :class:`pylops.FirstDerivative`
+array slices, in NumPy or, as one step of a compiled program, in JAX (the same code), and its
+exact adjoint with NumPy slices. It is :class:`pylops.FirstDerivative`
 (``kind="forward"``, ``edge=False``) stacked over the axes, in one pass per axis over the
 array instead of pylops' generic loops and a stack's concatenation: at 60³ voxels × 4 fields in
 float32, a voxel regularizer's value and gradient take 12–16 ms with it against 28–36 ms through
@@ -17,9 +18,10 @@ three stacked pylops operators, on two CPU cores and on a GPU machine's host
 
 from __future__ import annotations
 
+import jax.numpy as jnp
 import numpy as np
 
-from operators.base import LinearOperator
+from operators.base import JaxMap, LinearOperator
 
 _AXES = {"x": 1, "y": 2, "z": 3}
 
@@ -38,6 +40,17 @@ def _spacing(spacing) -> tuple[float, float, float]:
     if len(spacing) != 3 or min(spacing) <= 0:
         raise ValueError(f"spacing must be a positive scalar or (dx, dy, dz) in m, got {spacing}")
     return spacing
+
+
+def _with_difference(out, index, upper, lower, scale: float):
+    """``out`` with ``out[index]`` set to ``(upper - lower) * scale``: in place for a NumPy
+    array (no temporary), a new array for a JAX one."""
+    if isinstance(out, np.ndarray):
+        target = out[index]
+        np.subtract(upper, lower, out=target)
+        target *= scale
+        return out
+    return out.at[index].set((upper - lower) * scale)
 
 
 class ForwardDifferences(LinearOperator):
@@ -82,13 +95,21 @@ class ForwardDifferences(LinearOperator):
         lower[axis], upper[axis] = slice(None, -1), slice(1, None)
         return tuple(lower), tuple(upper)
 
-    def _forward(self, x):
-        out = np.zeros((len(self.axes), *self.dims), np.result_type(x, self.dtype))
-        for d, axis, scale in zip(out, self.axes, self.inverse_steps, strict=True):
+    def differences(self, x, xp=np):
+        """The differences of fields ``x`` (``dims``) computed with the array namespace ``xp``:
+        NumPy (the operator's value) or :mod:`jax.numpy` (its :meth:`jax_map`), in ``x``'s
+        dtype."""
+        out = xp.zeros((len(self.axes), *self.dims), x.dtype)
+        for i, (axis, scale) in enumerate(zip(self.axes, self.inverse_steps, strict=True)):
             lower, upper = self._ends(axis)
-            np.subtract(x[upper], x[lower], out=d[lower])
-            d[lower] *= scale
+            out = _with_difference(out, (i, *lower), x[upper], x[lower], scale)
         return out if self.stacked else out[0]
+
+    def jax_map(self) -> JaxMap:
+        return JaxMap(lambda _, x: self.differences(x, jnp))
+
+    def _forward(self, x):
+        return self.differences(x.astype(np.result_type(x, self.dtype), copy=False))
 
     def _adjoint(self, y):
         y = y if self.stacked else y[None]

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from operators.base import LinearOperator
+from operators.base import JaxMap, LinearOperator, precision
+from operators.interop import to_jax
 
 
 class Diagonal(LinearOperator):
@@ -25,6 +26,10 @@ class Diagonal(LinearOperator):
         dtype = diagonal.dtype if dtype is None else np.dtype(dtype)
         self.diagonal = diagonal.astype(dtype)
         super().__init__(diagonal.shape, diagonal.shape, dtype=dtype, name=name)
+
+    def jax_map(self) -> JaxMap:
+        with precision(self.dtype):
+            return JaxMap(lambda d, x: d * x, to_jax(self.diagonal, self.dtype))
 
     def _forward(self, x):
         return self.diagonal * x

@@ -21,7 +21,7 @@ from functools import partial
 import jax
 import numpy as np
 
-from operators.base import Jacobian, Operator, precision
+from operators.base import Jacobian, JaxMap, Operator, precision
 from operators.interop import to_jax, to_numpy
 from operators.rte_batches import DEFAULT_MEMORY_BUDGET, batch_rays_for
 from operators.rte_kernel import (
@@ -94,6 +94,10 @@ class KernelOperator(Operator):
         self._cotangent = jax.jit(lambda a, x, w: jax.vjp(lambda y: reverse(*a, y), x)[1](w)[0])
         self._value_and_pullback = jax.jit(lambda a, x: jax.vjp(lambda y: reverse(*a, y), x))
         self._pull = jax.jit(lambda pullback, w: pullback(w)[0])
+
+    def jax_map(self) -> JaxMap:
+        """:attr:`function` on :attr:`args`, checked by :attr:`domain`."""
+        return JaxMap(lambda args, x: self.function(*args, x), self.args, self.domain)
 
     def _in(self, x):
         return to_jax(x, dtype=self.dtype)

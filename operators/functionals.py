@@ -14,17 +14,28 @@ and ``total_variation(dims, spacing)`` is :math:`\Phi(f) = \sum_d \mathrm{mean}(
 
 from __future__ import annotations
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 
 from operators.base import Operator
 from operators.derivatives import Gradient
 
 
+def namespace(x):
+    """The array namespace of ``x``: :mod:`jax.numpy` for a JAX array (or a tracer inside a
+    compiled program), NumPy otherwise."""
+    return jnp if isinstance(x, jax.Array) else np
+
+
 class Functional:
-    """A scalar function of an array, with gradient and proximal map.
+    r"""A scalar function of an array, with gradient and proximal map.
 
     Values are summed in float64 whatever the array's precision; gradients and proximal maps
-    keep the array's dtype.
+    keep the array's dtype. A functional that is a sum over the array's elements, :math:`f(x)
+    = c \sum_i t(x_i)`, gives its terms :math:`t(x_i)` by :meth:`terms` and its gradient for
+    NumPy and JAX arrays alike, so that a compiled program (:mod:`solvers.compiled_objective`)
+    evaluates it on JAX's device.
 
     Parameters
     ----------
@@ -38,7 +49,13 @@ class Functional:
         self.scale = float(scale)
 
     def __call__(self, x) -> float:
-        raise NotImplementedError
+        return self.scale * float(self.terms(np.asarray(x)).sum(dtype=np.float64))
+
+    def terms(self, x):
+        r"""The terms :math:`t(x_i)` of a functional :math:`c \sum_i t(x_i)`, shape of ``x``
+        (NumPy or JAX, as ``x``), unscaled; ``NotImplementedError`` for one that is not such a
+        sum."""
+        raise NotImplementedError(f"{type(self).__name__} is not a sum of terms per element")
 
     def grad(self, x) -> np.ndarray:
         raise NotImplementedError
@@ -62,13 +79,13 @@ class SquaredL2(Functional):
     def _residual(self, x):
         return x if self.offset is None else x - self.offset
 
-    def __call__(self, x) -> float:
-        r = self._residual(np.asarray(x))
-        squares = (r * r.conj()).real if np.iscomplexobj(r) else r * r
-        return self.scale * float(squares.sum(dtype=np.float64))
+    def terms(self, x):
+        r = self._residual(x)
+        return (r * r.conj()).real if np.iscomplexobj(r) else r * r
 
-    def grad(self, x) -> np.ndarray:
-        return 2.0 * self.scale * self._residual(np.asarray(x))
+    def grad(self, x):
+        """:math:`2c(x - b)`, NumPy or JAX as ``x``."""
+        return 2.0 * self.scale * self._residual(namespace(x).asarray(x))
 
     def prox(self, x, tau: float) -> np.ndarray:
         b = 0.0 if self.offset is None else self.offset
@@ -101,19 +118,22 @@ class L1(Functional):
             raise ValueError(f"smoothing must be a finite number >= 0, got {smoothing}")
         self.smoothing = float(smoothing)
 
-    def __call__(self, x) -> float:
-        a = np.abs(np.asarray(x))
+    def terms(self, x):
+        xp = namespace(x)
+        a = xp.abs(x)
         if self.smoothing == 0:
-            return self.scale * float(a.sum(dtype=np.float64))
+            return a
         eps = self.smoothing
-        return self.scale * float(np.where(a <= eps, a * a / (2 * eps), a - eps / 2).sum(
-            dtype=np.float64))
+        return xp.where(a <= eps, a * a / (2 * eps), a - eps / 2)
 
-    def grad(self, x) -> np.ndarray:
-        x = np.asarray(x)
+    def grad(self, x):
+        r""":math:`c\,\mathrm{sign}(x)` (0 at 0), or smoothed :math:`c\,\mathrm{clip}(x /
+        \varepsilon, -1, 1)`; NumPy or JAX as ``x``."""
+        xp = namespace(x)
+        x = xp.asarray(x)
         if self.smoothing == 0:
-            return self.scale * np.sign(x)
-        return self.scale * np.clip(x / self.smoothing, -1.0, 1.0)
+            return self.scale * xp.sign(x)
+        return self.scale * xp.clip(x / self.smoothing, -1.0, 1.0)
 
     def prox(self, x, tau: float) -> np.ndarray:
         x = np.asarray(x)

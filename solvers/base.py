@@ -105,11 +105,16 @@ class RunState:
         """A generator for the next iteration, a function of (seed, iteration, stream) only."""
         return np.random.default_rng([self.seed, self.iteration + 1, 1 + stream])
 
-    def evaluate(self, x, sample: int | None = None) -> Evaluation:
+    def evaluate(self, x, sample: int | None = None, jacobians: bool = False) -> Evaluation:
         """Objective at ``x``; ``sample`` picks the stochastic sample (default: next iteration).
+        It carries the operators' Jacobians when ``jacobians`` is set or the solver applies
+        them (:attr:`Solver.applies_jacobians`), so that an accepted trial point needs no
+        second evaluation; otherwise it may come from the compiled objective
+        (:attr:`solvers.Problem.compiled`).
         """
         sample = self.iteration + 1 if sample is None else sample
-        return self.problem.evaluate(x, iteration=sample, seed=self.seed)
+        return self.problem.evaluate(x, iteration=sample, seed=self.seed,
+                                     jacobians=jacobians or self.solver.applies_jacobians)
 
     def start_evaluation(self) -> Evaluation:
         """The objective at ``x`` for the next iteration's sample (``current`` if it fits)."""
@@ -121,7 +126,7 @@ class RunState:
     def linearized(self) -> Evaluation:
         """``current`` with the Jacobians of the forward and regularizer operators."""
         if self.current.forward_jacobian is None:
-            self.current = self.evaluate(self.x)
+            self.current = self.evaluate(self.x, jacobians=True)
         return self.current
 
     def save(self, path):

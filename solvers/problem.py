@@ -34,11 +34,13 @@ seed and the iteration only, so the same iteration sees the same sample after a 
 
 from __future__ import annotations
 
+from functools import cached_property
 from typing import Any
 
 import numpy as np
 
 from operators import Composite, Operator, linearize_together
+from solvers.compiled_objective import CompiledObjective
 
 #: :math:`\Phi = g \circ K` as solvers name it: the class :class:`operators.Composite` itself.
 Regularizer = Composite
@@ -243,20 +245,43 @@ class Problem:
         return grad
 
     # -- objective -----------------------------------------------------------------------------
-    def evaluate(self, x, iteration: int = 0, seed: int = 0) -> Evaluation:
+    @cached_property
+    def compiled(self) -> CompiledObjective | None:
+        """The objective and its gradient as compiled JAX programs
+        (:mod:`solvers.compiled_objective`), built on first use; None when the forward map,
+        the regularizer's operator or its functional has no JAX form. Set it to None to
+        evaluate through the operators' own methods."""
+        return CompiledObjective.of(self.forward, self.data, self.regularizer)
+
+    def evaluate(self, x, iteration: int = 0, seed: int = 0,
+                 jacobians: bool = False) -> Evaluation:
         """The objective at ``x``; gradient computed on demand (one reverse pass).
 
-        A data map and regularizer after the same inner operator (e.g. a network at the voxel
+        Without ``jacobians``, a problem whose operators all have JAX forms evaluates by compiled
+        JAX programs (:attr:`compiled`). Otherwise each operator is linearized, and a data
+        map and regularizer after the same inner operator (e.g. a network at the voxel
         centres) evaluate it once and pull back through it once
         (:func:`operators.linearize_together`).
 
-        ``iteration`` and ``seed`` only matter for a stochastic ``value_and_grad``.
+        Parameters
+        ----------
+        x : array_like
+            The point, shape :attr:`dims`.
+        iteration, seed : int, optional
+            Pick a stochastic ``value_and_grad``'s sample; otherwise unused.
+        jacobians : bool, optional
+            Whether the evaluation must carry the Jacobians of :math:`F` and :math:`K`
+            (``forward_jacobian``, ``regularizer_jacobian``), as Gauss–Newton and PDHG need;
+            default False.
         """
         if self.stochastic:
             loss, grad = self.value_and_grad(x, iteration, np.random.default_rng([seed,
                                                                                  iteration]))
             grad = np.asarray(grad, dtype=self.dtype).reshape(self.dims)
             return Evaluation(loss, np.nan, np.nan, grad=grad, sample=iteration)
+        if not jacobians and self.compiled is not None:
+            misfit, reg, grad = self.compiled(self.forward._as_input(x), self.lam)
+            return Evaluation(misfit + self.lam * reg, misfit, reg, grad_fn=grad)
         ops = [self.forward] + ([] if self.regularizer is None else [self.regularizer.op])
         jacobians, pull = linearize_together(ops, x)
         jf, jk = jacobians[0], (jacobians[1] if len(jacobians) > 1 else None)

@@ -1,5 +1,6 @@
 """D_x, D_y, D_z, Gradient and the regularizers built on them."""
 
+import jax
 import numpy as np
 import pytest
 
@@ -127,3 +128,14 @@ def test_bad_dims_and_spacing():
         ForwardDifferences(DIMS, "xx")
     with pytest.raises(ValueError, match="one direction"):
         ForwardDifferences(DIMS, "xy", stacked=False)
+
+
+@pytest.mark.parametrize("axes, stacked", [("xyz", True), ("zx", True), ("y", False)])
+def test_the_jax_map_gives_the_numpy_differences(axes, stacked):
+    differences = ForwardDifferences(DIMS, axes, SPACING, stacked=stacked)
+    f = np.random.default_rng(6).standard_normal(DIMS)
+    jax_map = differences.jax_map()
+    with op.precision(np.float64):
+        traced = np.asarray(jax.jit(jax_map.function)(jax_map.args, f))
+    np.testing.assert_allclose(traced, differences(f), rtol=1e-14, atol=1e-14)
+    assert jax_map.check is None
