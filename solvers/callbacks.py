@@ -88,17 +88,29 @@ class Checkpoint(Callback):
         Checkpoint file (``.npz``), overwritten each time.
     every : int, optional
         Save interval in iterations (default 10).
+    seconds : float, optional
+        Wall time in s of the run that must have passed since the last save (or the start)
+        for a save at an ``every``-th iteration (default 0: each of them saves); a run of
+        fast iterations then saves every few seconds instead of every few iterations.
     """
 
-    def __init__(self, path, every: int = 10):
+    def __init__(self, path, every: int = 10, seconds: float = 0.0):
         if int(every) != every or every < 1:
             raise ValueError(f"every must be a positive integer, got {every}")
+        if not seconds >= 0:
+            raise ValueError(f"seconds must be a number >= 0 (wall seconds), got {seconds}")
         self.path = Path(path)
         self.every = int(every)
+        self.seconds = float(seconds)
+        self._saved_at = 0.0
+
+    def on_start(self, run):
+        self._saved_at = run.elapsed
 
     def __call__(self, run):
-        if run.iteration % self.every == 0:
+        if run.iteration % self.every == 0 and run.elapsed - self._saved_at >= self.seconds:
             run.save(self.path)
+            self._saved_at = run.elapsed
 
     def on_end(self, run):
         run.save(self.path)

@@ -88,13 +88,18 @@ from invflame.measurement_file import MeasurementFile
 from invflame.scene import Scene
 from invflame.spectroscopy.absorption_table import AbsorptionTable
 
-__all__ = ["CHECKPOINT_EVERY", "FINGERPRINT", "FORCE_HINT", "Log", "absorption_table",
-           "build_scene", "check_fingerprint", "check_resumable", "chi2_per_value",
-           "choose_lambda", "initial_fields", "load_truth", "make_representation", "measure",
-           "physical_fields", "protocol", "read_data", "regularizer_weight", "run_experiment",
-           "run_fingerprint", "starting_parameters", "truth_scores"]
+__all__ = ["CHECKPOINT_EVERY", "CHECKPOINT_SECONDS", "FINGERPRINT", "FORCE_HINT", "Log",
+           "absorption_table", "build_scene", "check_fingerprint", "check_resumable",
+           "chi2_per_value", "choose_lambda", "initial_fields", "load_truth", "make_representation",
+           "measure", "physical_fields", "protocol", "read_data", "regularizer_weight",
+           "run_experiment", "run_fingerprint", "starting_parameters", "truth_scores"]
 
 CHECKPOINT_EVERY = 10
+#: A checkpoint is written every :data:`CHECKPOINT_EVERY` iterations once this many seconds
+#: (wall clock) have passed since the last: a killed run loses at most about that much work,
+#: and a run of fast iterations (a voxel epoch on a GPU takes under 50 ms) does not spend its
+#: time writing checkpoints.
+CHECKPOINT_SECONDS = 10.0
 
 
 class Log:
@@ -334,7 +339,8 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
     problem = representation.problem(measurement.data, regularizer=reg["kind"], lam=lam, x0=x0,
                                      sigma=sigma)
     per_epoch = representation.iterations_per_epoch
-    callbacks = [solvers.Checkpoint(checkpoint, every=CHECKPOINT_EVERY)]
+    callbacks = [solvers.Checkpoint(checkpoint, every=CHECKPOINT_EVERY,
+                                    seconds=CHECKPOINT_SECONDS)]
     if progress:
         callbacks.append(solvers.ProgressBar(desc=out.name))
     resume_from = checkpoint if resume and checkpoint.is_file() else None

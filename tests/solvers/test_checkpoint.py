@@ -112,6 +112,21 @@ def test_resume_refuses_another_solver_or_other_options(nonlinear_problem, tmp_p
         solvers.solve(nonlinear_problem, "adam", resume=tmp_path / "missing.npz")
 
 
+@pytest.mark.parametrize("seconds, saves", [(0.0, [2, 4, 6, 7]), (3600.0, [7])])
+def test_checkpoints_wait_their_seconds_between_saves(nonlinear_problem, tmp_path, monkeypatch,
+                                                      seconds, saves):
+    """Every 2nd iteration saves unless ``seconds`` have not passed since the last save; the
+    end of the run (iteration 7) always saves."""
+    saved = []
+    monkeypatch.setattr(solvers.base.RunState, "save",
+                        lambda run, path: saved.append(run.iteration))
+    solvers.solve(nonlinear_problem, "gd", max_iter=7,
+                  callbacks=[solvers.Checkpoint(tmp_path / "run.npz", every=2, seconds=seconds)])
+    assert saved == saves
+    with pytest.raises(ValueError, match="seconds must be a number >= 0"):
+        solvers.Checkpoint(tmp_path / "run.npz", seconds=-1.0)
+
+
 def test_stopping_rules_and_callbacks(nonlinear_problem):
     p = nonlinear_problem
     assert solvers.solve(p, "gd", rtol_loss=1e-3).stop_reason.startswith("rtol_loss")
