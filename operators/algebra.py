@@ -65,7 +65,8 @@ class Composition(Operator):
 
     def jax_map(self) -> JaxMap | None:
         """The two parts' maps composed, when both have one; the outer part's domain is
-        checked at the inner part's value, computed by the inner operator."""
+        checked at the inner part's value, computed on the host by the inner operator (cheap
+        for a diagonal before the emission map, as a voxel problem has it)."""
         outer, inner = self.outer.jax_map(), self.inner.jax_map()
         if outer is None or inner is None:
             return None

@@ -283,8 +283,8 @@ class Problem:
             misfit, reg, grad = self.compiled(self.forward._as_input(x), self.lam)
             return Evaluation(misfit + self.lam * reg, misfit, reg, grad_fn=grad)
         ops = [self.forward] + ([] if self.regularizer is None else [self.regularizer.op])
-        jacobians, pull = linearize_together(ops, x)
-        jf, jk = jacobians[0], (jacobians[1] if len(jacobians) > 1 else None)
+        linearized, pull = linearize_together(ops, x)
+        jf, jk = linearized[0], (linearized[1] if len(linearized) > 1 else None)
         residual = jf.value - self.data
         misfit = sum_of_squares(residual)
         reg = 0.0 if jk is None else float(self.regularizer.functional(jk.value))
