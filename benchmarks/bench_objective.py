@@ -1,4 +1,4 @@
-"""Time the voxel objective and gradient as one compiled program against the operators' methods.
+"""Time the voxel objective and gradient compiled whole against the operators' methods.
 
 Run: ``python benchmarks/bench_objective.py [--rays-per-pixel 1] [--repeats 10] [--clock wall]``.
 
