@@ -25,7 +25,7 @@ fractions.
 from __future__ import annotations
 
 import dataclasses
-from functools import partial
+from functools import cached_property, partial
 
 import jax
 import jax.numpy as jnp
@@ -199,6 +199,12 @@ class RTETables:
         """Number of wavenumbers."""
         return self.wavenumber.shape[0]
 
+    @cached_property
+    def temperature_range(self) -> tuple[float, float]:
+        """The first and last temperature node in K, as Python numbers (read from JAX's
+        device once, not at every check)."""
+        return float(self.nodes[0]), float(self.nodes[-1])
+
     def check_temperature(self, temperature, where: str) -> None:
         """Refuse temperatures the tables do not cover.
 
@@ -216,7 +222,7 @@ class RTETables:
             If a temperature lies outside the nodes' range, naming the span and the range.
         """
         temperature = np.asarray(temperature)
-        t_min, t_max = float(self.nodes[0]), float(self.nodes[-1])
+        t_min, t_max = self.temperature_range
         eps = (np.finfo(temperature.dtype).eps
                if np.issubdtype(temperature.dtype, np.floating) else 0.0)
         low, high = float(temperature.min()), float(temperature.max())

@@ -317,7 +317,7 @@ class Solver:
         run = RunState(self, problem, x, ck.evaluation(problem.dtype), {},
                        History(meta["history"]), meta["seed"], iteration=meta["iteration"],
                        elapsed_before=meta["elapsed"], callbacks=callbacks)
-        if run.current.grad is None:
+        if not run.current.has_grad:
             run.current = run.evaluate(x, run.current.sample)
         run.state = self.state_from_arrays(ck.state, run)
         return run
@@ -334,7 +334,7 @@ def _non_finite(step: Step) -> str | None:
 
 def _log_row(run: RunState, info: dict[str, float]) -> float:
     c = run.current
-    grad_norm = float(np.linalg.norm(run.problem.projected_gradient(run.x, c.grad)))
+    grad_norm = run.problem.projected_gradient_norm(run.x, c)
     run.history.append(iteration=run.iteration, loss=c.loss, misfit=c.misfit,
                        regularizer=c.regularizer, grad_norm=grad_norm, time=run.elapsed,
                        **info)

@@ -28,6 +28,13 @@ What is the same on both paths:
   temperatures the absorption tables cover) runs on the host at every point, before the
   program; a point outside raises the operator's own ``ValueError``.
 
+The point and the gradient stay on the device (``Evaluation.point``,
+``Evaluation.native_grad``): Adam's step (:mod:`solvers.adam`) and the history's projected
+gradient norm (:meth:`CompiledObjective.projected_gradient_norm`) run there too, with the
+bounds copied to the device once (:attr:`CompiledObjective.bounds`), and the host receives the
+new point, once per iteration, and numbers. ``Evaluation.grad`` copies the gradient to the host
+when something asks for it (a checkpoint, a line search's inner product).
+
 The Jacobians themselves (``Evaluation.forward_jacobian``), which Gauss–Newton and PDHG apply
 many times per iteration, come from the operators' methods only.
 """
@@ -40,6 +47,7 @@ import numpy as np
 
 from operators import Composite, Functional, JaxMap, Operator, precision
 from operators.interop import to_jax, to_numpy
+from solvers.bounds import compact, projected_gradient
 
 
 def _sums_terms(functional: Functional) -> bool:
@@ -70,10 +78,18 @@ class CompiledObjective:
         Shape of :math:`\theta`.
     dtype : numpy dtype
         Of :math:`\theta`, the data and the programs.
+    bounds : pair of array or None, optional
+        The problem's lower and upper bounds on :math:`\theta` (None: unbounded on that side).
+
+    Attributes
+    ----------
+    bounds : pair of jax.Array or None
+        The bounds on JAX's device, for steps computed there (broadcastable to :attr:`dims`:
+        a bound per field is copied as one number per field).
     """
 
     def __init__(self, forward: JaxMap, data, regularizer: Composite | None,
-                 regularizer_map: JaxMap | None, dims, dtype):
+                 regularizer_map: JaxMap | None, dims, dtype, bounds=(None, None)):
         self.dims = tuple(dims)
         self.dtype = np.dtype(dtype)
         self.checks = [m.check for m in (forward, regularizer_map)
@@ -83,6 +99,8 @@ class CompiledObjective:
         with precision(self.dtype):
             self.args = (forward.args, to_jax(data, self.dtype),
                          None if regularizer_map is None else regularizer_map.args)
+            self.bounds = tuple(None if b is None else to_jax(compact(b), self.dtype)
+                                for b in bounds)
 
         def value_and_pullback(args, x, lam):
             forward_args, d, regularizer_args = args
@@ -103,12 +121,15 @@ class CompiledObjective:
 
         self._value_and_pullback = jax.jit(value_and_pullback)
         self._pull = jax.jit(lambda pullback, cotangent: pullback(cotangent)[0])
+        self._projected_norm = jax.jit(
+            lambda x, g, bounds: jnp.linalg.norm(projected_gradient(x, g, *bounds)))
 
     @classmethod
-    def of(cls, forward: Operator, data, regularizer: Composite | None
+    def of(cls, forward: Operator, data, regularizer: Composite | None, bounds=(None, None)
            ) -> CompiledObjective | None:
-        """The compiled objective of a forward map, its data and a regularizer, or None when
-        one of them has no JAX form (then the operators' own methods serve)."""
+        """The compiled objective of a forward map, its data and a regularizer (with the
+        parameters' bounds), or None when one of them has no JAX form (then the operators' own
+        methods serve)."""
         forward_map = forward.jax_map()
         if forward_map is None:
             return None
@@ -119,7 +140,8 @@ class CompiledObjective:
             regularizer_map = regularizer.op.jax_map()
             if regularizer_map is None:
                 return None
-        return cls(forward_map, data, regularizer, regularizer_map, forward.dims, forward.dtype)
+        return cls(forward_map, data, regularizer, regularizer_map, forward.dims, forward.dtype,
+                   bounds)
 
     def __call__(self, x: np.ndarray, lam: float):
         r"""The loss's parts at ``x`` (shape :attr:`dims`, checked by the operators' domains)
@@ -131,21 +153,35 @@ class CompiledObjective:
             :math:`\|F(x) - d\|_2^2`.
         regularizer : float
             :math:`g(K(x))`, unweighted (0 without a regularizer).
+        point : jax.Array
+            ``x`` on JAX's device.
         grad : callable
-            ``grad()`` is :math:`\nabla L(x)` for weight ``lam``, a NumPy array of shape
-            :attr:`dims`, from one reverse pass.
+            ``grad()`` is :math:`\nabla L(x)` for weight ``lam``, a JAX array of shape
+            :attr:`dims` on JAX's device, from one reverse pass.
         """
         for check in self.checks:
             check(x)
         with precision(self.dtype):
+            point = to_jax(x, self.dtype)
             misfit_rows, regularizer_rows, pullback, cotangent = self._value_and_pullback(
-                self.args, to_jax(x, self.dtype), lam)
+                self.args, point, lam)
         regularizer = 0.0 if regularizer_rows is None else (
             self.scale * _row_total(regularizer_rows))
 
         def grad():
             with precision(self.dtype):
-                return np.asarray(to_numpy(self._pull(pullback, cotangent)),
-                                  dtype=self.dtype).reshape(self.dims)
+                return self._pull(pullback, cotangent).reshape(self.dims)
 
-        return _row_total(misfit_rows), regularizer, grad
+        return _row_total(misfit_rows), regularizer, point, grad
+
+    def projected_gradient_norm(self, point, grad) -> float:
+        r""":math:`\|\cdot\|_2` of :func:`solvers.bounds.projected_gradient` with
+        :attr:`bounds`, computed on JAX's device.
+
+        Parameters
+        ----------
+        point, grad : jax.Array or ndarray
+            A point and the objective's gradient there, shape :attr:`dims`.
+        """
+        with precision(self.dtype):
+            return float(self._projected_norm(point, grad, self.bounds))

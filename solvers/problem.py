@@ -40,6 +40,8 @@ from typing import Any
 import numpy as np
 
 from operators import Composite, Operator, linearize_together
+from operators.interop import to_numpy
+from solvers.bounds import compact, project, projected_gradient
 from solvers.compiled_objective import CompiledObjective
 
 #: :math:`\Phi = g \circ K` as solvers name it: the class :class:`operators.Composite` itself.
@@ -80,39 +82,54 @@ class Evaluation:
         Iteration whose random sample produced this evaluation; None when deterministic.
     forward_jacobian, regularizer_jacobian : operators.Jacobian or None
         Linearizations of :math:`F` and :math:`K` at the point (with ``.value``), when known.
+    point : jax.Array or None
+        The point on JAX's device when a compiled objective (:attr:`Problem.compiled`)
+        computed this evaluation, None otherwise.
     """
 
     def __init__(self, loss, misfit, regularizer, grad=None, grad_fn=None, sample=None,
-                 forward_jacobian=None, regularizer_jacobian=None):
+                 forward_jacobian=None, regularizer_jacobian=None, point=None):
         self.loss = float(loss)
         self.misfit = float(misfit)
         self.regularizer = float(regularizer)
         self.sample = sample
         self.forward_jacobian = forward_jacobian
         self.regularizer_jacobian = regularizer_jacobian
-        self._grad = grad
+        self.point = point
+        self._native = grad
+        self._grad = None if grad is None else to_numpy(grad)
         self._grad_fn = grad_fn
 
     @property
     def has_grad(self) -> bool:
         """Whether the gradient has been computed already."""
-        return self._grad is not None
+        return self._native is not None
+
+    @property
+    def native_grad(self):
+        r""":math:`\nabla L(\theta)` where it was computed, shape of the parameters (computed
+        on first access): a JAX array on JAX's device from a compiled objective, a NumPy array
+        otherwise."""
+        if self._native is None:
+            if self._grad_fn is None:
+                raise RuntimeError("this evaluation carries no gradient")
+            self._native = self._grad_fn()
+            self._grad_fn = None
+        return self._native
 
     @property
     def grad(self) -> np.ndarray:
-        r""":math:`\nabla L(\theta)`, shape of the parameters (computed on first access)."""
+        r""":math:`\nabla L(\theta)` as a NumPy array, shape of the parameters (computed, and
+        copied from JAX's device, on first access)."""
         if self._grad is None:
-            if self._grad_fn is None:
-                raise RuntimeError("this evaluation carries no gradient")
-            self._grad = self._grad_fn()
-            self._grad_fn = None
+            self._grad = to_numpy(self.native_grad)
         return self._grad
 
 
 def _bound(value, dims, dtype, what):
     if value is None:
         return None
-    arr = np.asarray(value, dtype=dtype)
+    arr = np.asarray(compact(value), dtype=dtype)  # a bound per field stays one number each
     try:
         return np.broadcast_to(arr, dims)
     except ValueError:
@@ -231,18 +248,21 @@ class Problem:
         """Projection onto the box ``lower <= x <= upper`` (identity when unbounded)."""
         if not self.bounded:
             return np.asarray(x)
-        lo = -np.inf if self.lower is None else self.lower
-        hi = np.inf if self.upper is None else self.upper
-        return np.clip(x, lo, hi).astype(self.dtype, copy=False)
+        return project(np.asarray(x), self.lower, self.upper).astype(self.dtype, copy=False)
 
     def projected_gradient(self, x, grad) -> np.ndarray:
-        """The gradient with components pushing out of an active bound set to zero."""
-        grad = np.array(grad)
-        if self.lower is not None:
-            grad[(x <= self.lower) & (grad > 0)] = 0
-        if self.upper is not None:
-            grad[(x >= self.upper) & (grad < 0)] = 0
-        return grad
+        """The gradient with components pushing out of an active bound set to zero
+        (:func:`solvers.bounds.projected_gradient`)."""
+        return projected_gradient(np.asarray(x), np.asarray(grad), self.lower, self.upper)
+
+    def projected_gradient_norm(self, x, evaluation: Evaluation) -> float:
+        r""":math:`\|\cdot\|_2` of :meth:`projected_gradient` at ``x`` for ``evaluation``'s
+        gradient (the history's ``grad_norm``), computed on JAX's device when the gradient
+        is there (:attr:`Evaluation.point` set), so that it stays there."""
+        if evaluation.point is not None:
+            return self.compiled.projected_gradient_norm(evaluation.point,
+                                                         evaluation.native_grad)
+        return float(np.linalg.norm(self.projected_gradient(x, evaluation.grad)))
 
     # -- objective -----------------------------------------------------------------------------
     @cached_property
@@ -251,7 +271,14 @@ class Problem:
         (:mod:`solvers.compiled_objective`), built on first use; None when the forward map,
         the regularizer's operator or its functional has no JAX form. Set it to None to
         evaluate through the operators' own methods."""
-        return CompiledObjective.of(self.forward, self.data, self.regularizer)
+        return CompiledObjective.of(self.forward, self.data, self.regularizer,
+                                    (self.lower, self.upper))
+
+    @property
+    def compiles(self) -> bool:
+        """Whether :meth:`evaluate` (without ``jacobians``) runs the :attr:`compiled` programs:
+        the problem is deterministic and all its operators have JAX forms."""
+        return not self.stochastic and self.compiled is not None
 
     def evaluate(self, x, iteration: int = 0, seed: int = 0,
                  jacobians: bool = False) -> Evaluation:
@@ -280,8 +307,8 @@ class Problem:
             grad = np.asarray(grad, dtype=self.dtype).reshape(self.dims)
             return Evaluation(loss, np.nan, np.nan, grad=grad, sample=iteration)
         if not jacobians and self.compiled is not None:
-            misfit, reg, grad = self.compiled(self.forward._as_input(x), self.lam)
-            return Evaluation(misfit + self.lam * reg, misfit, reg, grad_fn=grad)
+            misfit, reg, point, grad = self.compiled(self.forward._as_input(x), self.lam)
+            return Evaluation(misfit + self.lam * reg, misfit, reg, grad_fn=grad, point=point)
         ops = [self.forward] + ([] if self.regularizer is None else [self.regularizer.op])
         linearized, pull = linearize_together(ops, x)
         jf, jk = linearized[0], (linearized[1] if len(linearized) > 1 else None)
