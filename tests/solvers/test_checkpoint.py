@@ -14,6 +14,7 @@ import pytest
 
 import operators as op
 import solvers
+from solvers.checkpoint import save_checkpoint
 
 OPTIONS = {"gd": {}, "adam": {"lr": 0.05}, "gauss-newton": {}, "lbfgs": {},
            "pdhg": {"inner_iter": 10}, "jaxopt-lbfgs": {}}
@@ -63,6 +64,25 @@ def test_interrupted_and_resumed_run_equals_uninterrupted_run(problem_for, tmp_p
     np.testing.assert_array_equal(resumed.x, full.x)
     for column in ("iteration", "loss", "misfit", "regularizer", "grad_norm"):
         np.testing.assert_array_equal(resumed.history[column], full.history[column])
+
+
+def test_a_checkpoint_without_its_gradient_resumes_by_evaluating_it(nonlinear_problem,
+                                                                     tmp_path):
+    """A checkpoint may hold no gradient (``save_checkpoint(..., grad=None, ...)``): the
+    resumed run evaluates it again and goes on as the uninterrupted run."""
+    solver = solvers.get("adam")(max_iter=6, lr=0.05)
+    full = solver.run(nonlinear_problem, seed=5)
+    path = tmp_path / "run.npz"
+    with pytest.raises(Interrupt):
+        solver.run(nonlinear_problem, seed=5, callbacks=[solvers.Checkpoint(path, every=1),
+                                                         interrupt_at(3)])
+    saved = solvers.load_checkpoint(path)
+    assert saved.grad is not None
+    save_checkpoint(path, saved.meta, saved.x, None, saved.state)
+    assert solvers.load_checkpoint(path).grad is None
+    resumed = solver.run(nonlinear_problem, resume=path)
+    np.testing.assert_array_equal(resumed.x, full.x)
+    np.testing.assert_array_equal(resumed.history["loss"], full.history["loss"])
 
 
 @pytest.mark.parametrize("name", ["adam", "gd"])
