@@ -63,7 +63,8 @@ class RunState:
     solver : Solver
     problem : Problem
     x : ndarray
-        Current parameters.
+        Current parameters (possibly a read-only copy of a point on JAX's device: a step and
+        a callback must not change them; :class:`~solvers.history.Result` holds a copy).
     iteration : int
         Iterations done.
     current : Evaluation
@@ -249,7 +250,7 @@ class Solver:
         finally:
             for cb in callbacks:
                 cb.on_end(run)
-        return Result(x=run.x, history=run.history, stop_reason=reason,
+        return Result(x=np.array(run.x), history=run.history, stop_reason=reason,
                       iterations=run.iteration, solver=self.name,
                       options={**self.options.as_dict(), **self.stopping.as_dict()},
                       problem=problem.name, seed=run.seed, elapsed=run.elapsed,

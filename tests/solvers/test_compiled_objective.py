@@ -172,9 +172,10 @@ def test_the_point_gradient_and_adam_s_moments_stay_on_the_device(tmp_path):
     np.testing.assert_allclose(on_device, on_host, rtol=1e-14)
 
     states, path = [], tmp_path / "run.npz"
-    solvers.get("adam")(max_iter=3, lr=0.05).run(
+    result = solvers.get("adam")(max_iter=3, lr=0.05).run(
         problem, x0=x, callbacks=[lambda run: states.append(run.state),
                                   solvers.Checkpoint(path, every=1)])
+    assert result.x.flags.writeable  # the host's copy of the device's point, the user's own
     assert all(isinstance(s[k], jax.Array) for s in states for k in ("m", "v"))
     saved = solvers.load_checkpoint(path).state
     for k in ("m", "v"):
