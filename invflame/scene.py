@@ -45,7 +45,7 @@ from invflame.field import validate_values
 from invflame.geometry import CameraRig, RaySegments, VoxelGrid, paper_rig, traverse
 from invflame.spectroscopy.absorption_table import AbsorptionTable
 from operators import ILSConvolution
-from operators.base import precision
+from operators.base import check_precision, precision
 from operators.emission_rte import EmissionRTE, KernelOperator, RTETables, batch_rays_for
 from operators.interop import to_jax, to_numpy
 from operators.rte_tables import rayleigh_soot_constant
@@ -392,10 +392,15 @@ class Scene:
         Returns
         -------
         jax.Array
-            Differentiable with :func:`jax.vjp`/:func:`jax.grad` (reverse mode). A float64
-            scene computes in float64 where JAX's 64-bit mode is on (inside
-            :func:`operators.base.precision`, or with ``jax_enable_x64``).
+            Differentiable with :func:`jax.vjp`/:func:`jax.grad` (reverse mode).
+
+        Raises
+        ------
+        ValueError
+            For fields of another shape, and for a float64 scene while JAX's 64-bit mode is
+            off (call inside :func:`operators.base.precision`, or with ``jax_enable_x64``).
         """
+        check_precision(self.dtype, "this scene")
         fields = to_jax(fields, dtype=self.dtype)
         if fields.shape != self.field_shape:
             raise ValueError(f"fields must have shape {self.field_shape}, got {fields.shape}")

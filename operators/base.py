@@ -99,6 +99,29 @@ def precision(dtype):
     return contextlib.nullcontext()
 
 
+def check_precision(dtype, what: str) -> None:
+    """Refuse to compute ``what`` in float64 where JAX would silently compute in float32.
+
+    Parameters
+    ----------
+    dtype : numpy dtype
+        The dtype ``what`` computes in.
+    what : str
+        Names the computation in the message.
+
+    Raises
+    ------
+    ValueError
+        For float64 while JAX's 64-bit mode is off here, saying how to turn it on.
+    """
+    if np.dtype(dtype) == np.float64 and not jax.config.jax_enable_x64:
+        raise ValueError(
+            f"{what} is float64, but JAX's 64-bit mode is off here, so JAX would compute in "
+            "float32: call it inside `with operators.precision(numpy.float64):` (the "
+            "operators' own methods do), or turn the mode on for the process with "
+            "jax.config.update('jax_enable_x64', True)")
+
+
 @dataclasses.dataclass(frozen=True)
 class JaxMap:
     r"""An operator as a function that JAX can trace: :math:`y = F(x)` is

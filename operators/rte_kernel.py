@@ -79,6 +79,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from operators.base import check_precision
 from operators.planck import planck
 from operators.rte_batches import (
     batch_rays_for,
@@ -501,6 +502,13 @@ def emission_radiance(tables: RTETables, fields, lengths, batch_rays: int | None
     -------
     jax.Array, shape (n_rays, n_eta)
         Spectral radiance in W/(m²·sr·cm⁻¹), in the tables' dtype.
+
+    Raises
+    ------
+    ValueError
+        For inputs of the wrong shape, and for float64 tables while JAX's 64-bit mode is off
+        (call inside :func:`operators.precision`; :class:`~operators.emission_rte.EmissionRTE`
+        does).
     """
     fields, lengths, background = _check_inputs(tables, fields, lengths, background)
     if batch_rays is None:
@@ -525,6 +533,11 @@ def emission_radiance_jvp(tables: RTETables, fields, lengths, d_fields, d_length
     -------
     radiance, d_radiance : jax.Array, shape (n_rays, n_eta)
         In W/(m²·sr·cm⁻¹) and W/(m²·sr·cm⁻¹) per unit of the tangent.
+
+    Raises
+    ------
+    ValueError
+        As :func:`emission_radiance`.
     """
     fields, lengths, background = _check_inputs(tables, fields, lengths, background)
     if batch_rays is None:
@@ -544,6 +557,7 @@ def _radiance_jvp_jit(batch_rays, sweeps, tables, fields, lengths, d_fields, d_l
 
 
 def _check_inputs(tables: RTETables, fields, lengths, background=None):
+    check_precision(tables.dtype, "the emission kernel on these tables")
     fields = jnp.asarray(fields, tables.dtype)
     lengths = jnp.asarray(lengths, tables.dtype)
     n_fields = tables.n_fields

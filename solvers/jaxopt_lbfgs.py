@@ -6,6 +6,12 @@ its algorithm and line search (zoom, strong Wolfe) jit-compiled around a host ca
 logging, stopping rules and checkpoints are ours; the full jaxopt state (L-BFGS memory
 included) is saved, so a resumed run reproduces an uninterrupted one.
 
+jaxopt runs in the problem's dtype. For a float64 problem JAX's 64-bit mode is on for the
+whole process while jaxopt runs (:func:`_float64_everywhere`), and off again after, when it was
+off: the host callback runs on XLA's threads, which the calling thread's mode
+(:func:`operators.precision`) does not reach, and there JAX would round its float64 results to
+float32 or refuse them.
+
 The first iteration of a run compiles jaxopt's update (seconds); a solver instance keeps the
 compiled update for the last problem it solved, so a resume or a second run on that problem
 starts at once. Upstream jaxopt is no longer developed (it warns so on import); the solver uses
@@ -14,6 +20,8 @@ only its stable L-BFGS(-B) classes.
 
 from __future__ import annotations
 
+import contextlib
+import threading
 from dataclasses import dataclass
 
 import jax
@@ -48,6 +56,30 @@ class JaxoptLBFGSOptions(SolverOptions):
     maxls: int = option(30, ">= 1", lambda v: v >= 1)
 
 
+def _process_x64() -> bool:
+    """Whether JAX's 64-bit mode is on for the process, whatever the calling thread's own
+    setting (a new thread sees the process's)."""
+    seen = []
+    thread = threading.Thread(target=lambda: seen.append(bool(jax.config.jax_enable_x64)))
+    thread.start()
+    thread.join()
+    return seen[0]
+
+
+@contextlib.contextmanager
+def _float64_everywhere(dtype):
+    """JAX's 64-bit mode for the whole process inside, for a float64 ``dtype`` (module notes);
+    the process's setting is restored on leaving."""
+    if np.dtype(dtype) != np.float64 or _process_x64():
+        yield
+        return
+    jax.config.update("jax_enable_x64", True)
+    try:
+        yield
+    finally:
+        jax.config.update("jax_enable_x64", False)
+
+
 @register("jaxopt-lbfgs")
 class JaxoptLBFGS(Solver):
     """jaxopt L-BFGS (L-BFGS-B with bounds); see the module docstring and
@@ -65,7 +97,8 @@ class JaxoptLBFGS(Solver):
         """
         cached = getattr(self, "_compiled", None)
         if cached is None or cached[0] is not run.problem:
-            cached = (run.problem, *self._build(run.problem))
+            with _float64_everywhere(run.problem.dtype):  # jaxopt makes constants as it is built
+                cached = (run.problem, *self._build(run.problem))
             self._compiled = cached
         _, solver, extra, active = cached
         active["run"] = run
@@ -106,7 +139,8 @@ class JaxoptLBFGS(Solver):
 
     def init_state(self, run):
         solver, extra, _ = self._setup(run)
-        return {"jaxopt": solver.init_state(jnp.asarray(run.x), **extra)}
+        with _float64_everywhere(run.problem.dtype):
+            return {"jaxopt": solver.init_state(jnp.asarray(run.x), **extra)}
 
     def state_to_arrays(self, run):
         leaves = jax.tree_util.tree_leaves(run.state["jaxopt"])
@@ -115,12 +149,14 @@ class JaxoptLBFGS(Solver):
     def state_from_arrays(self, arrays, run):
         template = self.init_state(run)["jaxopt"]
         treedef = jax.tree_util.tree_structure(template)
-        leaves = [jnp.asarray(arrays[f"{_LEAF}{i:03d}"]) for i in range(treedef.num_leaves)]
+        with _float64_everywhere(run.problem.dtype):
+            leaves = [jnp.asarray(arrays[f"{_LEAF}{i:03d}"]) for i in range(treedef.num_leaves)]
         return {"jaxopt": jax.tree_util.tree_unflatten(treedef, leaves)}
 
     def step(self, run) -> Step:
         solver, extra, cache = self._setup(run)
-        params, state = solver.update(jnp.asarray(run.x), run.state["jaxopt"], **extra)
+        with _float64_everywhere(run.problem.dtype):
+            params, state = solver.update(jnp.asarray(run.x), run.state["jaxopt"], **extra)
         # jaxopt's projected iterate may lie a rounding error outside the box
         x = run.problem.project(np.asarray(params, dtype=run.problem.dtype))
         ev = cache.get(x) or run.evaluate(x)

@@ -9,7 +9,6 @@ import json
 import sys
 from pathlib import Path
 
-import jax
 import numpy as np
 
 from invflame.background import BlackbodyWall
@@ -19,7 +18,6 @@ from invflame.scene import Scene
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from test_scene import small_table, smooth_field  # noqa: E402
 
-jax.config.update("jax_enable_x64", True)
 grid = VoxelGrid.cube(5, size=1.0, centre=(0.0, 0.5, 0.0))
 settings = dict(resolution=4.0, dtype=np.float64, planck="exact",
                 background=BlackbodyWall(600.0, 0.7), soot=np.full(grid.shape, 1e-6))

@@ -72,12 +72,19 @@ def test_the_pieces_share_the_scene_tables_and_give_its_map(scene64):
     np.testing.assert_allclose(scene64.operator(fields), by_pieces, rtol=1e-12)
 
 
+@pytest.mark.usefixtures("x64")
 def test_fused_gradient_equals_the_operator_vjp(scene64):
     fields = smooth_field(scene64.grid, seed=1)
     w = np.random.default_rng(2).standard_normal(scene64.data_shape)
     grad = jax.grad(lambda f: jnp.sum(jnp.asarray(w) * scene64.forward(f)))(jnp.asarray(fields))
     np.testing.assert_allclose(grad, scene64.operator.vjp(fields, w), rtol=1e-11,
                                atol=1e-13 * np.abs(grad).max())
+
+
+def test_a_float64_scene_as_a_jax_function_needs_64_bit_mode(scene64):
+    """Outside JAX's 64-bit mode its forward would round to float32: refused, saying how."""
+    with pytest.raises(ValueError, match=r"this scene is float64.*operators.precision"):
+        scene64.forward(smooth_field(scene64.grid))
 
 
 def test_voxel_forward_map_dot_and_taylor_tests(scene64):

@@ -47,6 +47,7 @@ def test_sum_scale_negation_and_difference():
         assert combo.linear and op.dottest(combo).passed
 
 
+@pytest.mark.usefixtures("x64")
 def test_chain_rule_matches_jax_on_the_same_function():
     """A mixed JAX/torch/linear composition has the derivatives JAX finds for the same map."""
     A = matrix(M, "A")

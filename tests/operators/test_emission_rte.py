@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from rte_reference import random_rays, reference_radiance, synthetic_sigma
 
+from operators.base import precision
 from operators.emission_rte import EmissionRTE, RTETables, emission_radiance
 from operators.planck import BOLTZMANN, planck
 from operators.tabulated import PiecewiseCubic
@@ -33,6 +34,7 @@ HOT = (1800.0, (0.1, 0.2, 0.0))
 COLD = (600.0, (0.05, 0.02, 0.0))
 
 
+@pytest.mark.usefixtures("x64")
 def test_homogeneous_slab_matches_closed_form():
     fields, lengths = slab_rays([HOT], [0.3])
     radiance = np.asarray(emission_radiance(tables(), fields, lengths))[0]
@@ -40,12 +42,14 @@ def test_homogeneous_slab_matches_closed_form():
     np.testing.assert_allclose(radiance, expected, rtol=1e-12)
 
 
+@pytest.mark.usefixtures("x64")
 def test_slab_cut_into_segments_equals_one_segment():
     one = emission_radiance(tables(), *slab_rays([HOT], [0.3]))
     cut = emission_radiance(tables(), *slab_rays([HOT] * 5, [0.01, 0.1, 0.04, 0.1, 0.05]))
     np.testing.assert_allclose(cut, one, rtol=1e-12)
 
 
+@pytest.mark.usefixtures("x64")
 @pytest.mark.parametrize("order", [(HOT, COLD), (COLD, HOT)])
 def test_two_slabs_in_both_orders(order):
     (near, far), (l_near, l_far) = order, (0.2, 0.35)
@@ -61,7 +65,8 @@ def test_two_slabs_in_both_orders(order):
 def test_transparent_gas_emits_nothing():
     fields, lengths = slab_rays([(1500.0, (0.0, 0.0, 0.3))] * 3, [0.2, 0.3, 0.1])
     for dtype in (np.float32, np.float64):
-        radiance = np.asarray(emission_radiance(tables(dtype, "table"), fields, lengths))
+        with precision(dtype):
+            radiance = np.asarray(emission_radiance(tables(dtype, "table"), fields, lengths))
         assert np.all(radiance == 0.0)
 
 
@@ -69,7 +74,8 @@ def test_optically_thick_gas_shows_the_segment_nearest_the_camera():
     thick = (900.0, (0.5, 0.5, 0.0))
     fields, lengths = slab_rays([thick, HOT], [1e4, 0.5])
     for dtype, rtol in ((np.float64, 1e-12), (np.float32, 1e-6)):
-        radiance = np.asarray(emission_radiance(tables(dtype), fields, lengths))[0]
+        with precision(dtype):
+            radiance = np.asarray(emission_radiance(tables(dtype), fields, lengths))[0]
         np.testing.assert_allclose(radiance, planck(ETA, thick[0]), rtol=rtol)
 
 
@@ -82,7 +88,8 @@ def test_optically_thick_gas_shows_the_segment_nearest_the_camera():
 def test_matches_the_numpy_reference(dtype, planck_mode, rtol, batch_rays):
     fields, lengths = random_rays(n_rays=7, n_seg=9)
     expected = reference_radiance(ETA, NODES, SIGMA, fields, lengths, P)
-    radiance = emission_radiance(tables(dtype, planck_mode), fields, lengths, batch_rays)
+    with precision(dtype):
+        radiance = emission_radiance(tables(dtype, planck_mode), fields, lengths, batch_rays)
     assert radiance.dtype == dtype
     np.testing.assert_allclose(np.asarray(radiance, np.float64), expected, rtol=rtol)
 
@@ -105,6 +112,7 @@ def test_operator_shapes_dtype_and_skipped_species():
     assert rte.tables.species == (0, 1)  # CH4 has zero cross-section here
 
 
+@pytest.mark.usefixtures("x64")
 def test_bad_inputs_are_reported():
     with pytest.raises(ValueError, match="coef must have shape"):
         RTETables.from_spline(ETA, NODES, COEF[:, :-1], P)
@@ -116,6 +124,16 @@ def test_bad_inputs_are_reported():
         emission_radiance(tables(), np.ones((4, 2, 4)), np.ones((2, 5)))
 
 
+def test_float64_tables_outside_64_bit_mode_are_refused_not_rounded():
+    """Without JAX's 64-bit mode, JAX would compute float64 tables' kernel in float32."""
+    fields, lengths = slab_rays([HOT], [0.3])
+    with pytest.raises(ValueError, match=r"64-bit mode is off here.*operators.precision"):
+        emission_radiance(tables(), fields, lengths)
+    with precision(np.float64):
+        assert emission_radiance(tables(), fields, lengths).dtype == np.float64
+
+
+@pytest.mark.usefixtures("x64")
 def test_operator_from_prepared_tables_equals_the_one_from_splines():
     fields, lengths = random_rays(n_rays=5, n_seg=7, seed=4)
     prepared = tables(np.float64, "table")

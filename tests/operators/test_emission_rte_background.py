@@ -28,6 +28,7 @@ def reference_transmittance(fields, lengths):
     return np.exp(-np.sum(kappa * lengths[..., None], axis=1))
 
 
+@pytest.mark.usefixtures("x64")
 def test_background_is_added_through_the_ray_transmittance():
     fields, lengths = random_rays(n_rays=5, n_seg=6, seed=11)
     background = wall(5)
@@ -55,6 +56,7 @@ def test_jacobian_dot_and_taylor_tests_with_background(planck_mode):
     check_derivatives(rte, fields, rtol=1e-10)
 
 
+@pytest.mark.usefixtures("x64")
 def test_background_cotangent_is_the_ray_transmittance():
     """The reverse sweep's cotangent of I_bg is w * tau_ray, and the fields' cotangents match
     plain autodiff of the whole-array formulation with background."""

@@ -54,6 +54,7 @@ def test_linearize_keeps_value_and_matches_jvp_vjp():
     np.testing.assert_allclose(jac.rmatvec(w.ravel()), rte.vjp(fields, w).ravel(), rtol=1e-13)
 
 
+@pytest.mark.usefixtures("x64")
 def test_custom_vjp_equals_autodiff_of_the_plain_formulation():
     fields, lengths = random_rays(n_rays=6, n_seg=8, seed=5)
     lengths = np.where(lengths > 0, lengths, 0.004)  # every segment real: d/dlength defined
@@ -71,6 +72,7 @@ def test_custom_vjp_equals_autodiff_of_the_plain_formulation():
     np.testing.assert_allclose(ours[1], plain[1], rtol=1e-10)
 
 
+@pytest.mark.usefixtures("x64")
 def test_jvp_in_lengths_matches_autodiff():
     fields, lengths = random_rays(n_rays=3, n_seg=4, seed=2)
     lengths = lengths + 0.001

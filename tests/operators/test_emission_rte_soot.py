@@ -32,6 +32,7 @@ def test_the_rayleigh_constant_of_a_given_refractive_index():
         rayleigh_soot_constant(2.0, 0.0)
 
 
+@pytest.mark.usefixtures("x64")
 def test_soot_adds_its_continuum_to_the_gas_absorption():
     """A ray through soot alone is a grey-ish slab: B(T)(1 - exp(-C f_v eta 100 L))."""
     fields, lengths = sooty_rays(4, 5, seed=3)
@@ -52,6 +53,7 @@ def test_soot_adds_its_continuum_to_the_gas_absorption():
                                rtol=1e-12)
 
 
+@pytest.mark.usefixtures("x64")
 def test_gas_and_soot_against_plain_autodiff():
     fields, lengths = sooty_rays(5, 6, seed=7)
     lengths = np.where(lengths > 0, lengths, 0.004)
@@ -86,6 +88,7 @@ def test_soot_field_dot_and_taylor_tests(planck_mode):
     check_derivatives(rte, fields, rtol=1e-10)
 
 
+@pytest.mark.usefixtures("x64")
 def test_soot_fields_are_required_and_the_constant_checked():
     fields, lengths = random_rays(n_rays=3, n_seg=4)
     tables = RTETables.from_spline(ETA, NODES, SPLINE.coef, P, np.float64, soot=C)

@@ -33,8 +33,9 @@ def gradients(tables, fields, lengths, background, sweeps):
     def loss(f, s, b):
         return jnp.sum(weights * emission_radiance(tables, f, s, 3, b, sweeps=sweeps))
 
-    args = (jnp.asarray(a, tables.dtype) for a in (fields, lengths, background))
-    return jax.jit(jax.grad(loss, argnums=(0, 1, 2)))(*args)
+    with precision(tables.dtype):
+        args = (jnp.asarray(a, tables.dtype) for a in (fields, lengths, background))
+        return jax.jit(jax.grad(loss, argnums=(0, 1, 2)))(*args)
 
 
 def assert_same_gradients(xla, ours, rtol):
@@ -92,9 +93,10 @@ def assert_same_values(tables, fields, lengths, background, rtol):
     d_lengths = np.where(lengths > 0, rng.standard_normal(lengths.shape) * 0.01, 0.0)
     results = {}
     for sweeps in SWEEPS:
-        radiance = emission_radiance(tables, fields, lengths, 3, background, sweeps=sweeps)
-        value, tangent = emission_radiance_jvp(tables, fields, lengths, d_fields, d_lengths, 3,
-                                               background, sweeps=sweeps)
+        with precision(tables.dtype):
+            radiance = emission_radiance(tables, fields, lengths, 3, background, sweeps=sweeps)
+            value, tangent = emission_radiance_jvp(tables, fields, lengths, d_fields, d_lengths,
+                                                   3, background, sweeps=sweeps)
         results[sweeps] = radiance, value, tangent
     xla, ours = results["xla"], results["numba"]
     assert np.abs(xla[0]).max() > 0 and np.abs(xla[2]).max() > 0
@@ -158,14 +160,10 @@ def test_float64_stays_float64_with_64_bit_mode_in_the_callers_thread_only():
     Numba sweeps on threads of its own, and nothing may round to float32 on the way."""
     fields, lengths = random_rays(n_rays=7, n_seg=9, seed=5)
     background = np.zeros((7, ETA.size))
-    jax.config.update("jax_enable_x64", False)
-    try:
-        with precision(np.float64):
-            tables = RTETables.from_spline(ETA, NODES, COEF, 101325.0, np.float64, "table")
-            xla = gradients(tables, fields, lengths, background, "xla")
-            ours = gradients(tables, fields, lengths, background, "numba")
-    finally:
-        jax.config.update("jax_enable_x64", True)
+    with jax.enable_x64(False), precision(np.float64):
+        tables = RTETables.from_spline(ETA, NODES, COEF, 101325.0, np.float64, "table")
+        xla = gradients(tables, fields, lengths, background, "xla")
+        ours = gradients(tables, fields, lengths, background, "numba")
     assert all(a.dtype == b.dtype == np.float64 for a, b in zip(xla, ours, strict=True))
     assert_same_gradients(xla, ours, 1e-12)
 

@@ -40,6 +40,7 @@ def test_adjoint_adds_repeated_voxels():
     assert back[5] == 3 and back[2] == 1 and back[0] == 2 and back.sum() == 6
 
 
+@pytest.mark.usefixtures("x64")
 def test_jax_form_matches_and_its_vjp_is_the_adjoint():
     voxel = voxels(seed=2)
     sampling = VoxelSampling(voxel, SHAPE)

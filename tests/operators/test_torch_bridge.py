@@ -10,6 +10,8 @@ from operators.emission_rte import RTETables, emission_radiance
 from operators.tabulated import PiecewiseCubic
 from operators.torch_bridge import torch_function
 
+pytestmark = pytest.mark.usefixtures("x64")  # float64 throughout: the kernel called as JAX's
+
 
 @pytest.fixture(scope="module")
 def kernel():

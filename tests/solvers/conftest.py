@@ -10,9 +10,13 @@ import solvers
 
 
 def _nonlinear_forward(n_params=10, n_data=30, seed=0):
-    a = jnp.asarray(np.random.default_rng(seed).standard_normal((n_data, n_params)) / 3)
-    return op.Operator.from_jax(lambda x: jnp.tanh(a @ x) + 0.1 * (a @ x), (n_params,),
-                                (n_data,), name="tanh(Ax)")
+    a = np.random.default_rng(seed).standard_normal((n_data, n_params)) / 3
+
+    def forward(x):
+        y = jnp.asarray(a, x.dtype) @ x  # the matrix in the operator's dtype (float64)
+        return jnp.tanh(y) + 0.1 * y
+
+    return op.Operator.from_jax(forward, (n_params,), (n_data,), name="tanh(Ax)")
 
 
 class NumpyTanh(op.Operator):

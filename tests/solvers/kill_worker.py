@@ -24,14 +24,11 @@ import signal
 import sys
 from pathlib import Path
 
-import jax
 import numpy as np
 import pylops
 
 import operators as op
 import solvers
-
-jax.config.update("jax_enable_x64", True)  # float64 JAX, as in the test suite (tests/conftest.py)
 
 MODES = ("after-save", "before-save", "mid-write")
 SEED = 11

@@ -195,9 +195,9 @@ def test_without_a_compiled_objective_adam_steps_in_numpy():
 def test_float32_adam_on_the_device_is_as_accurate_as_numpy_s():
     """20 float32 Adam iterations, stepped on the device and in NumPy, each within 20 float32
     roundings (20 x 6e-8, relative) of the float64 run. (A float32 1 - beta2 computed on the
-    device, 4.7e-5 off, put the device's iterates 4e-6 away.) The float32 runs go without
-    JAX's 64-bit mode, as the invflame command runs them: with it, which the tests' conftest
-    turns on, JAX would compute that 1 - beta2 in float64."""
+    device, 4.7e-5 off, put the device's iterates 4e-6 away. The float32 runs go without JAX's
+    64-bit mode, as the invflame command and these tests run them: with it, JAX would compute
+    that 1 - beta2 in float64 and the trap would not show.)"""
     rng = np.random.default_rng(11)
     data, x0 = rng.standard_normal((6, 5)), np.clip(rng.standard_normal(DIMS), -1, 1)
     results = {}
@@ -207,9 +207,7 @@ def test_float32_adam_on_the_device_is_as_accurate_as_numpy_s():
             problem = solvers.Problem(forward, data, lower=-1.0, upper=1.0, x0=x0.astype(dtype))
             if not compiled:
                 problem.compiled = None
-            with jax.enable_x64(dtype == np.float64):
-                results[dtype, compiled] = solvers.get("adam")(max_iter=20, lr=0.05).run(
-                    problem).x
+            results[dtype, compiled] = solvers.get("adam")(max_iter=20, lr=0.05).run(problem).x
     reference = results[np.float64, True]
     np.testing.assert_allclose(results[np.float64, False], reference, rtol=1e-12)
     for compiled in (True, False):

@@ -1,6 +1,7 @@
 """Every registered solver, swapped by name on one problem, lowers the objective and finds
 known minimizers."""
 
+import jax
 import numpy as np
 import pytest
 
@@ -57,3 +58,16 @@ def test_solver_keeps_the_bounds_and_finds_the_bounded_minimizer(tikhonov_proble
     result = solvers.solve(boxed, name, **OPTIONS[name])
     assert np.all(result.x <= upper)
     np.testing.assert_allclose(result.x, reference, atol=1e-5, rtol=0, err_msg=str(result))
+
+
+@pytest.mark.parametrize("name", solvers.available())
+def test_a_float64_run_leaves_jax_64_bit_mode_as_it_found_it(nonlinear_problem, name):
+    """Every solver runs a float64 problem in float64 without JAX's 64-bit mode on for the
+    process, and leaves the mode off after (jaxopt's turns it on while it runs)."""
+    assert not jax.config.jax_enable_x64
+    result = solvers.solve(nonlinear_problem, name, **{**NONLINEAR[name], "max_iter": 3})
+    assert result.x.dtype == np.float64 and not jax.config.jax_enable_x64
+    with jax.enable_x64(True):  # a caller's own mode is kept too
+        solvers.solve(nonlinear_problem, name, **{**NONLINEAR[name], "max_iter": 1})
+        assert jax.config.jax_enable_x64
+    assert not jax.config.jax_enable_x64
