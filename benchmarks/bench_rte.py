@@ -26,6 +26,10 @@ the repeats:
   all rays at once, called by XLA), and the gathers and scatters that put rays into batches and
   back (with their VJP).
 
+The rows are timed in turn (:func:`timing.best_times`: one call of each per round), in two
+groups: exp-only, forward and forward+VJP, whose ratios are the targets, then the others (the
+JVP's ratio to the forward mixes the groups); the stages each alone.
+
 "elements" is the number of real segments times the number of wavenumbers; the kernel also
 sweeps the padding of each batch (rays sorted by segment count), reported as "swept".
 Peak memory is the process's peak resident set size (``bench_memory.peak_mib``): at the end, once
@@ -51,7 +55,7 @@ import numpy as np
 from accelerator import device_peaks
 from allocator import add_argument, apply
 from bench_memory import peak_mib
-from timing import CLOCKS, best_time
+from timing import CLOCKS, best_time, best_times
 
 from invflame.experiments.machine import processor
 from invflame.phantoms.registry import make_phantom
@@ -222,7 +226,7 @@ def main() -> None:
         "forward": lambda: scene.forward(fields),
         "forward+VJP": lambda: gradient(fields),
     }
-    times = {name: best_time(fn, args.repeats, args.clock) for name, fn in epoch.items()}
+    times = best_times(epoch, args.repeats, args.clock)
     epoch_peak = peak_mib()  # what a voxel reconstruction needs, before the other rows
     jacobian = scene.operator.linearize(np.asarray(fields))
     direction = np.random.default_rng(0).standard_normal(fields.shape).astype(np.float32)
@@ -230,7 +234,7 @@ def main() -> None:
     direction[1:] *= 0.01
     direction = direction.ravel()
     others = {"JVP": lambda: jacobian.matvec(direction), **kernel_calls(scene, fields, direction)}
-    times.update({name: best_time(fn, args.repeats, args.clock) for name, fn in others.items()})
+    times.update(best_times(others, args.repeats, args.clock))
     if args.stages:
         times.update({f"  {name}": t
                       for name, t in stages(scene, fields, args.repeats, args.clock).items()})

@@ -52,6 +52,7 @@ import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from timing import CLOCKS  # noqa: E402
 
 import operators  # noqa: E402
 import solvers  # noqa: E402
@@ -79,9 +80,6 @@ METHODS = {"tikhonov": "VG/Tikh.", "tv": "VG/TV"}
 FRACTIONS = (0.25, 0.5, 1.0)
 COUNTS = ("forward", "jvp", "vjp")
 GRACE = 1.5  # a run still inside an iteration at GRACE x its budget is cut off there
-#: The race's clocks: CPU seconds of this process (all its threads), robust to other jobs on
-#: a shared machine, and wall seconds.
-CLOCKS = {"cpu": time.process_time, "wall": time.perf_counter}
 XLABELS = {"cpu": "CPU time of the process [s]", "wall": "wall time [s]"}
 
 

@@ -1,0 +1,27 @@
+"""The benchmarks' timing: rows timed in turn, the best of each kept."""
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+import timing  # noqa: E402
+
+
+def test_rows_are_timed_in_turn_and_each_keeps_its_best(monkeypatch):
+    """One untimed call of each row, then rounds of one call of each; every row's best is the
+    shortest of its own timed calls, on a clock that each call advances by a known step."""
+    now, calls = [0.0], []
+    steps = {"a": [9.0, 3.0, 5.0, 4.0], "b": [7.0, 8.0, 2.0, 6.0]}  # first call untimed
+
+    def call(name):
+        def fn():
+            now[0] += steps[name][sum(c == name for c in calls)]
+            calls.append(name)
+        return fn
+
+    monkeypatch.setitem(timing.CLOCKS, "fake", lambda: now[0])
+    best = timing.best_times({"a": call("a"), "b": call("b")}, repeats=3, clock="fake")
+    assert calls == ["a", "b"] * 4
+    assert best == {"a": 3.0, "b": 2.0}
+    calls.clear()
+    assert timing.best_time(call("a"), repeats=3, clock="fake") == 3.0
