@@ -1,6 +1,9 @@
 """The Numba sweeps for CPUs (forward, forward-mode, reverse) against XLA's, and their float32
 exponential."""
 
+import json
+import subprocess
+import sys
 import tempfile
 from pathlib import Path
 
@@ -194,3 +197,17 @@ def test_the_sweeps_default_to_numba_on_a_cpu_and_refuse_unknown_names():
     assert choose_sweeps("xla") == "xla"
     with pytest.raises(ValueError, match=r"unknown sweeps 'c'; choose one of"):
         choose_sweeps("c")
+
+
+def test_sweeps_flush_subnormals_whichever_thread_started_numbas_threads():
+    """Numba's threads inherit the floating-point mode of the thread that starts them: XLA's
+    threads flush subnormal numbers to zero, Python's main thread does not. Each sweep flushes
+    them itself, as XLA's sweeps do, so that its results do not depend on where Numba's
+    threads started, and gives the threads back their mode after."""
+    done = subprocess.run([sys.executable, str(Path(__file__).with_name("subnormal_check.py"))],
+                          capture_output=True, text=True, timeout=600, check=False)
+    assert done.returncode == 0, done.stderr[-3000:]
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    for sweep in ("forward", "forward_mode", "reverse"):  # 1e-40 and more kept
+        assert result[sweep] == 0.0, (sweep, result[sweep])
+    assert result["threads_after"] == pytest.approx(1e-40, rel=1e-3)
