@@ -15,19 +15,21 @@ epoch is one pass over all rays, forward and backward:
   (network at all voxel centres, once for the data and the regularizer; voxel forward map,
   its VJP; the network's VJP).
 
-Compilation runs first (one untimed epoch of each) and is not timed; each epoch is timed
-``--repeats`` times, the best taken. Times are wall clock and CPU time of the process (all
-threads; steadier than wall time on a shared machine); compare them only as ratios within one
-run. The breakdown times the stages of the neural field's first batch one after the other
-(sampling with the coarse network, fine network, emission kernel on both sample sets, kernel
-VJP, networks' backward, regularizer), the second time they run: the first call took twice as
-long (1.10 against 0.55 s for the batch at 32 + 32 samples per ray). Peak resident memory is
-read after the neural-field epochs, before the voxel epochs run. The paper reports 479–493 ms
-per epoch and 65–66 MB on a GPU for its neural field (Tricard, Chen & Deng 2026, Table 1). The
-C allocator is set as the ``invflame`` command sets it (glibc's defaults with
-``--default-allocator``; ``benchmarks/allocator.py``). With ``--torch-device cuda`` the neural
-field's tensors live on the GPU (``benchmarks/accelerator.py``), the stages are timed after
-the GPU finished them, and the accelerators' peak memory is printed beside the resident one.
+Compilation runs first (one untimed epoch of each) and is not timed; the epochs are then timed
+in turn, ``--repeats`` rounds of one epoch of each (:func:`timing.best_times`), and the best of
+each kept, so that a change in the machine's load reaches every representation alike. Times are
+wall clock and CPU time of the process (all threads; steadier than wall time on a shared
+machine); compare them only as ratios within one run. The breakdown times the stages of the
+neural field's first batch one after the other (sampling with the coarse network, fine network,
+emission kernel on both sample sets, kernel VJP, networks' backward, regularizer), the second
+time they run: the first call took twice as long (1.10 against 0.55 s for the batch at 32 + 32
+samples per ray). Peak resident memory is read after the neural field's first epoch, before the
+voxel grid's first one. The paper reports 479–493 ms per epoch and 65–66 MB on a GPU for its
+neural field (Tricard, Chen & Deng 2026, Table 1). The C allocator is set as the ``invflame``
+command sets it (glibc's defaults with ``--default-allocator``; ``benchmarks/allocator.py``).
+With ``--torch-device cuda`` the neural field's tensors live on the GPU
+(``benchmarks/accelerator.py``), the stages are timed after the GPU finished them, and the
+accelerators' peak memory is printed beside the resident one.
 
     python benchmarks/bench_neural.py [--rays-per-pixel 9] [--batches N] [--centres]
         [--default-allocator] [--torch-device cuda]
@@ -43,6 +45,7 @@ import accelerator
 import numpy as np
 import torch
 from allocator import add_argument, apply
+from timing import best_times
 
 from invflame.phantoms import synthetic_plume
 from invflame.representations.neural import NeuralCentresRepresentation, NeuralFieldRepresentation
@@ -74,28 +77,25 @@ class Clock:
         return out
 
 
-def timed(fn, repeats: int) -> np.ndarray:
-    """Best wall and best CPU seconds of ``repeats`` calls of ``fn`` (after one untimed)."""
-    fn()
-    clock, best = Clock(), np.full(2, np.inf)
-    for _ in range(repeats):
-        clock.seconds.clear()
-        clock("run", fn)
-        best = np.minimum(best, clock.seconds["run"])
-    return best
+def synchronized(fn):
+    """``fn`` that returns once the work it queued on torch's device is done."""
+    def call():
+        fn()
+        accelerator.synchronize()
+    return call
 
 
-def voxel_epoch(scene, data, truth, repeats: int) -> np.ndarray:
-    """Wall and CPU seconds of the voxel objective and gradient over all rays."""
+def voxel_epoch(scene, data, truth):
+    """An epoch of the voxel grid: the objective and its gradient over all rays."""
     rep = VoxelRepresentation(scene.grid, scene.operator)
     problem = rep.problem(data, "tikhonov", x0=rep.initial_parameters(truth))
-    return timed(lambda: problem.evaluate(problem.x0).grad, repeats)
+    return synchronized(lambda: problem.evaluate(problem.x0).grad)
 
 
-def neural_epoch(rep, data, n_batches: int, repeats: int) -> np.ndarray:
-    """Wall and CPU seconds of an epoch of stochastic iterations, best of ``repeats`` (of each,
-    ``n_batches`` iterations timed and scaled to the epoch; consecutive iterations throughout,
-    so each repeat trains on other batches)."""
+def neural_epoch(rep, data, n_batches: int):
+    """``n_batches`` stochastic iterations of the neural field (to be scaled to an epoch by
+    ``rep.iterations_per_epoch / n_batches``); consecutive iterations throughout, so each call
+    trains on other batches."""
     problem = rep.problem(data, "tikhonov", x0=rep.initial_parameters())
     iterations = itertools.count()
 
@@ -104,7 +104,7 @@ def neural_epoch(rep, data, n_batches: int, repeats: int) -> np.ndarray:
             k = next(iterations)
             problem.value_and_grad(problem.x0, k, np.random.default_rng(k))
 
-    return timed(batches, repeats) * rep.iterations_per_epoch / n_batches
+    return synchronized(batches)
 
 
 def neural_stages(rep, data) -> dict:
@@ -140,11 +140,12 @@ def neural_stages(rep, data) -> dict:
     return clock.seconds
 
 
-def centres_epoch(scene, data, repeats: int) -> np.ndarray:
-    """Wall and CPU seconds of the neural-centres objective and gradient over all rays."""
+def centres_epoch(scene, data):
+    """An epoch of the neural-centres representation: its objective and gradient over all
+    rays."""
     rep = NeuralCentresRepresentation(scene)
     problem = rep.problem(data, "tikhonov", x0=rep.initial_parameters())
-    return timed(lambda: problem.evaluate(problem.x0).grad, repeats)
+    return synchronized(lambda: problem.evaluate(problem.x0).grad)
 
 
 def seconds(t) -> str:
@@ -169,7 +170,7 @@ def main():
                         help="time only this many batches and scale to an epoch "
                              "(default: the whole epoch)")
     parser.add_argument("--repeats", type=int, default=1,
-                        help="timed epochs of each representation, best taken")
+                        help="rounds of one timed epoch of each representation, best taken")
     parser.add_argument("--centres", action="store_true",
                         help="also time the neural-centres representation")
     add_argument(parser)
@@ -191,21 +192,27 @@ def main():
     renderer = rep.renderer
     n_batches = rep.iterations_per_epoch
     timed_batches = n_batches if args.batches is None else min(args.batches, n_batches)
-    neural = neural_epoch(rep, data, timed_batches, args.repeats)
+    epochs = {"neural field": neural_epoch(rep, data, timed_batches)}
+    epochs["neural field"]()  # compiles; the peak memory of a neural field's process
     neural_peak, neural_device_peak = peak_rss_mb(), accelerator.device_peaks()
     neural_stages(rep, data)  # a first call takes up to twice as long: not timed
     stages = neural_stages(rep, data)
-    voxel = voxel_epoch(scene, data, truth, args.repeats)
+    epochs["voxel grid"] = voxel_epoch(scene, data, truth)
+    if args.centres:
+        epochs["neural centres"] = centres_epoch(scene, data)
+    times = best_times(epochs, args.repeats, "wall and cpu")
+    neural = times["neural field"] * n_batches / timed_batches
+    voxel = times["voxel grid"]
     segments = int(np.count_nonzero(scene.segments.length))
     samples = scene.segments.n_rays * (2 * renderer.n_coarse + renderer.n_fine)
     print(f"voxel grid: {segments / scene.segments.n_rays:.1f} segments per sub-ray")
-    print(f"  epoch (objective + gradient, best of {args.repeats}): {seconds(voxel)}")
+    print(f"  epoch (objective + gradient, best of {args.repeats} in turn): {seconds(voxel)}")
     print(f"neural field: {rep.n_parameters} weights (coarse + fine), "
           f"{renderer.n_coarse} coarse + {renderer.n_fine} fine samples per sub-ray "
           f"({renderer.n_coarse} + {renderer.n_coarse + renderer.n_fine} kernel segments), "
           f"{renderer.batch_rays} pixels per batch in calls of {renderer.chunk_rays}, "
           f"{rep.batch_centres} centres per batch")
-    print(f"  epoch ({n_batches} batches, {timed_batches} timed, best of {args.repeats}): "
+    print(f"  epoch ({n_batches} batches, {timed_batches} timed, best of {args.repeats} in turn): "
           f"{seconds(neural)}   "
           f"[paper, GPU: {PAPER_MS}]")
     print(f"  neural / voxel epoch: {neural[0] / voxel[0]:.2f} wall, "
@@ -221,8 +228,8 @@ def main():
     for label, t in stages.items():
         print(f"    {label:<40} {milliseconds(t)}   {100 * t[1] / total[1]:4.0f} % CPU")
     if args.centres:
-        centres = centres_epoch(scene, data, args.repeats)
-        print(f"neural centres: epoch (objective + gradient, best of {args.repeats}): "
+        centres = times["neural centres"]
+        print(f"neural centres: epoch (objective + gradient, best of {args.repeats} in turn): "
               f"{seconds(centres)}")
         print(f"  neural centres / voxel epoch: {centres[0] / voxel[0]:.2f} wall, "
               f"{centres[1] / voxel[1]:.2f} CPU")

@@ -3,6 +3,8 @@
 import sys
 from pathlib import Path
 
+import numpy as np
+
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 import timing  # noqa: E402
 
@@ -25,3 +27,17 @@ def test_rows_are_timed_in_turn_and_each_keeps_its_best(monkeypatch):
     assert best == {"a": 3.0, "b": 2.0}
     calls.clear()
     assert timing.best_time(call("a"), repeats=3, clock="fake") == 3.0
+
+
+def test_two_clocks_keep_each_its_own_best(monkeypatch):
+    """With a clock of two readings (wall and CPU), each reading's best is taken on its own,
+    from whichever round gave it."""
+    now = np.zeros(2)
+    steps = iter([[9.0, 9.0], [3.0, 6.0], [5.0, 2.0], [4.0, 4.0]])  # first call untimed
+
+    def fn():
+        now[:] += next(steps)
+
+    monkeypatch.setitem(timing.CLOCKS, "fake pair", lambda: now.copy())
+    best = timing.best_times({"a": fn}, repeats=3, clock="fake pair")
+    np.testing.assert_array_equal(best["a"], [3.0, 2.0])
