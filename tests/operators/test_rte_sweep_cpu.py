@@ -2,6 +2,7 @@
 exponential."""
 
 import json
+import os
 import subprocess
 import sys
 import tempfile
@@ -212,3 +213,17 @@ def test_sweeps_flush_subnormals_whichever_thread_started_numbas_threads():
     for sweep in ("forward", "forward_mode", "reverse"):  # 1e-40 and more kept
         assert result[sweep] == 0.0, (sweep, result[sweep])
     assert result["threads_after"] == pytest.approx(1e-40, rel=1e-3)
+
+
+def test_sweeps_are_compiled_for_the_processors_widest_vectors(tmp_path):
+    """LLVM tunes Intel's AVX-512 processors to 256-bit vectors; each sweep's loop body asks
+    for 512-bit ones, and where the processor has AVX-512 its code uses them."""
+    done = subprocess.run([sys.executable, str(Path(__file__).with_name("vector_width_check.py"))],
+                          capture_output=True, text=True, timeout=600, check=False,
+                          env={**os.environ, "INVFLAME_CACHE": str(tmp_path)})
+    assert done.returncode == 0, done.stderr[-3000:]
+    report = json.loads(done.stdout.strip().splitlines()[-1])
+    for sweep in ("forward", "forward_mode", "reverse"):
+        assert report[sweep]["attribute"], sweep
+        if report["avx512f"]:
+            assert report[sweep]["zmm"] > 0, (sweep, report[sweep])
