@@ -8,6 +8,10 @@ functions, asks for the :func:`x64` fixture, or enters :func:`operators.base.pre
 its float64 cases.
 """
 
+import json
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import jax
@@ -32,3 +36,17 @@ def x64():
     for float64 kernels and scenes called as JAX functions."""
     with jax.enable_x64(True):
         yield
+
+
+@pytest.fixture(scope="session")
+def script_report():
+    """Run a check script in a Python process of its own; ``script_report(path, **environment)``
+    returns the JSON object on the last line the script prints. The process gets this process's
+    environment with ``environment`` added; a script that exits non-zero fails the test with the
+    end of its standard error."""
+    def run(path, **environment) -> dict:
+        done = subprocess.run([sys.executable, str(path)], env={**os.environ, **environment},
+                              capture_output=True, text=True, timeout=600, check=False)
+        assert done.returncode == 0, done.stderr[-3000:]
+        return json.loads(done.stdout.strip().splitlines()[-1])
+    return run

@@ -1,9 +1,5 @@
 """A scene in front of a background: the forward map with a wall or measured spectra per camera."""
 
-import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -118,14 +114,10 @@ def test_a_flameless_measurement_file_is_a_background(plain, tmp_path):
     np.testing.assert_array_equal(background.wavenumber, wall.out_wavenumber)
 
 
-def test_background_and_soot_on_two_devices_equal_one_device():
+def test_background_and_soot_on_two_devices_equal_one_device(script_report):
     """The sharded map splits the sub-rays' cameras with the rays and replicates the
     backgrounds and the soot (run in a fresh process with two forced CPU devices)."""
     check = Path(__file__).resolve().parent / "sharded_background_check.py"
-    env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=2")
-    done = subprocess.run([sys.executable, str(check)], env=env, capture_output=True,
-                          text=True, timeout=600, check=False)
-    assert done.returncode == 0, done.stderr[-3000:]
-    result = json.loads(done.stdout.strip().splitlines()[-1])
+    result = script_report(check, XLA_FLAGS="--xla_force_host_platform_device_count=2")
     assert result["devices"] == 2
     assert result["forward"] < 1e-12 and result["vjp"] < 1e-12, result

@@ -1,10 +1,6 @@
 """The Numba sweeps for CPUs (forward, forward-mode, reverse) against XLA's, and their float32
 exponential."""
 
-import json
-import os
-import subprocess
-import sys
 import tempfile
 from pathlib import Path
 
@@ -201,28 +197,22 @@ def test_the_sweeps_default_to_numba_on_a_cpu_and_refuse_unknown_names():
 
 
 @pytest.mark.skipif(not _X86, reason="the sweeps set the flush on x86 processors only")
-def test_sweeps_flush_subnormals_whichever_thread_started_numbas_threads():
+def test_sweeps_flush_subnormals_whichever_thread_started_numbas_threads(script_report):
     """Numba's threads inherit the floating-point mode of the thread that starts them: XLA's
     threads flush subnormal numbers to zero, Python's main thread does not. Each sweep flushes
     them itself, as XLA's sweeps do, so that its results do not depend on where Numba's
     threads started, and gives the threads back their mode after."""
-    done = subprocess.run([sys.executable, str(Path(__file__).with_name("subnormal_check.py"))],
-                          capture_output=True, text=True, timeout=600, check=False)
-    assert done.returncode == 0, done.stderr[-3000:]
-    result = json.loads(done.stdout.strip().splitlines()[-1])
+    result = script_report(Path(__file__).with_name("subnormal_check.py"))
     for sweep in ("forward", "forward_mode", "reverse"):  # 1e-40 and more kept
         assert result[sweep] == 0.0, (sweep, result[sweep])
     assert result["threads_after"] == pytest.approx(1e-40, rel=1e-3)
 
 
-def test_sweeps_are_compiled_for_the_processors_widest_vectors(tmp_path):
+def test_sweeps_are_compiled_for_the_processors_widest_vectors(script_report, tmp_path):
     """LLVM tunes Intel's AVX-512 processors to 256-bit vectors; each sweep's loop body asks
     for 512-bit ones, and where the processor has AVX-512 its code uses them."""
-    done = subprocess.run([sys.executable, str(Path(__file__).with_name("vector_width_check.py"))],
-                          capture_output=True, text=True, timeout=600, check=False,
-                          env={**os.environ, "INVFLAME_CACHE": str(tmp_path)})
-    assert done.returncode == 0, done.stderr[-3000:]
-    report = json.loads(done.stdout.strip().splitlines()[-1])
+    report = script_report(Path(__file__).with_name("vector_width_check.py"),
+                           INVFLAME_CACHE=str(tmp_path))
     for sweep in ("forward", "forward_mode", "reverse"):
         assert report[sweep]["attribute"], sweep
         if report["avx512f"]:

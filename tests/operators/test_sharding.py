@@ -1,9 +1,5 @@
 """Ray sharding: equal to the one-device kernel on 1 device here, and on 2 forced CPU devices."""
 
-import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import jax
@@ -60,13 +56,9 @@ def test_place_rays_pads_to_whole_blocks():
     assert placed.sharding.spec == jax.sharding.PartitionSpec(RAY_AXIS)
 
 
-def test_two_devices_equal_one_device_to_round_off():
+def test_two_devices_equal_one_device_to_round_off(script_report):
     """Kernel forward/VJP (37 rays: padded), scene forward/VJP and 5 Adam steps."""
-    env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=2")
-    done = subprocess.run([sys.executable, str(CHECK)], env=env, capture_output=True,
-                          text=True, timeout=600, check=False)
-    assert done.returncode == 0, done.stderr[-3000:]
-    result = json.loads(done.stdout.strip().splitlines()[-1])
+    result = script_report(CHECK, XLA_FLAGS="--xla_force_host_platform_device_count=2")
     assert result["devices"] == 2 and result["scene_devices"] == 2
     assert result["kernel_shape_equal"]
     for key in ("kernel_forward", "kernel_vjp_fields", "kernel_vjp_lengths", "scene_forward",
