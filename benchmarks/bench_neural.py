@@ -218,9 +218,9 @@ def main():
     print(f"  neural / voxel epoch: {neural[0] / voxel[0]:.2f} wall, "
           f"{neural[1] / voxel[1]:.2f} CPU; kernel segments per epoch "
           f"{samples / segments:.2f}x the voxel map's")
-    print(f"  peak resident memory after the neural epochs: {neural_peak:.0f} MB")
+    print(f"  peak resident memory after the first neural epoch: {neural_peak:.0f} MB")
     if neural_device_peak:
-        print(f"  peak accelerator memory after the neural epochs: {neural_device_peak}")
+        print(f"  peak accelerator memory after the first neural epoch: {neural_device_peak}")
     print(f"  parameter memory: {rep.parameter_bytes(rep.initial_parameters()) / 1e6:.3f} MB"
           f"   [paper, GPU memory: {PAPER_MB}]")
     total = sum(stages.values())
