@@ -31,7 +31,9 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--epochs", type=int, default=3)
     parser.add_argument("--pretrain", type=int, default=50)
-    parser.add_argument("--out", type=Path, default=None)
+    parser.add_argument("--out", type=Path, default=None,
+                        help="keep the runs in this folder (default: a temporary folder, "
+                        "removed at the end)")
     parser.add_argument("--method", choices=list(reproduce.METHODS),
                         help="measure one method in this process (default: each in its own "
                         "process, so that peak memories are separate)")
@@ -40,7 +42,13 @@ def main():
     add_argument(parser)
     accelerator.add_argument(parser)
     args = parser.parse_args()
-    out = args.out or Path(tempfile.mkdtemp(prefix="invflame-paper-epoch-"))
+    with tempfile.TemporaryDirectory(prefix="invflame-paper-epoch-") as scratch:
+        measure(args, args.out or Path(scratch))
+
+
+def measure(args, out):
+    """Run the chosen methods (each in a process of its own) or ``args.method`` here,
+    writing their runs under the folder ``out``."""
     if args.method is None:
         for method in reproduce.METHODS if args.all else ("VG/TV", "NN/Tikh."):
             subprocess.run([sys.executable, __file__, "--method", method, "--epochs",
