@@ -48,19 +48,29 @@ def loss_series(runs: dict[str, Path]) -> dict[str, dict[str, np.ndarray | None]
     return series
 
 
+#: Line styles of the runs' curves, in turn: a later run's curve lies over an earlier one's
+#: that it follows closely (the three neural-field rows of a study, a few per cent apart) and
+#: leaves it visible between its dashes or dots.
+_LINES = ({"linestyle": "-", "linewidth": 2.2}, {"linestyle": "--", "linewidth": 1.6},
+          {"linestyle": ":", "linewidth": 1.6})
+
+
 def loss_curves(runs: dict[str, Path], path) -> Path:
-    """Objective (and data misfit, where logged) against epoch for each run, log scale."""
+    """Objective (and data misfit, where logged) against epoch for each run, log scale; the
+    runs' curves are drawn solid, dashed and dotted in turn, so that curves that coincide all
+    show."""
     series = loss_series(runs)
+    line = {label: _LINES[i % len(_LINES)] for i, label in enumerate(series)}
     with_misfit = {label: s for label, s in series.items() if s["misfit"] is not None}
     fig, axes = plt.subplots(1, 2 if with_misfit else 1, figsize=(11 if with_misfit else 6, 4),
                              squeeze=False)
     axes = axes[0]
     for label, s in series.items():
-        axes[0].semilogy(s["epoch"], s["loss"], label=label)
+        axes[0].semilogy(s["epoch"], s["loss"], label=label, **line[label])
     axes[0].set(ylabel="loss", title="objective")
     if with_misfit:
         for label, s in with_misfit.items():
-            axes[1].semilogy(s["epoch"], s["misfit"], label=label)
+            axes[1].semilogy(s["epoch"], s["misfit"], label=label, **line[label])
         unlogged = sorted(set(series) - set(with_misfit))
         axes[1].set(ylabel="‖F(θ) − d‖² [(W/(m²·sr·cm⁻¹))²]",
                     title="data misfit" + (f" (not logged by {', '.join(unlogged)})"

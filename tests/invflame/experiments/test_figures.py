@@ -2,6 +2,7 @@
 
 import json
 
+import matplotlib.colors
 import matplotlib.image
 import numpy as np
 
@@ -49,3 +50,21 @@ def test_loss_series_in_epochs_and_misfit_only_where_logged(tmp_path):
     alone = matplotlib.image.imread(loss_curves({"NN/TV": runs["NN/TV"]}, tmp_path / "nn.png"))
     # the misfit panel is left out when no run logged a misfit
     assert alone.shape[1] < both.shape[1]
+
+
+def _pixels_of(image, colour):
+    """How many pixels of an RGBA image are within 0.05 of ``colour`` (a matplotlib colour)."""
+    rgb = np.array(matplotlib.colors.to_rgb(colour))
+    return int((np.abs(image[..., :3] - rgb).max(axis=-1) < 0.05).sum())
+
+
+def test_loss_curves_that_coincide_all_show(tmp_path):
+    _history(tmp_path / "NN-NR", 8, "nan", 2.0)
+    _history(tmp_path / "NN-Tikh", 8, "nan", 2.0)   # the same losses: the curves coincide
+    runs = {"NN/NR": tmp_path / "NN-NR", "NN/Tikh.": tmp_path / "NN-Tikh"}
+    both = matplotlib.image.imread(loss_curves(runs, tmp_path / "both.png"))
+    alone = matplotlib.image.imread(loss_curves({"NN/NR": runs["NN/NR"]}, tmp_path / "nr.png"))
+    # the first run's curve shows between the second's dashes: a good part of its pixels drawn
+    # alone, where with both solid it showed in the legend only (2 % of them)
+    assert _pixels_of(both, "C0") > 0.1 * _pixels_of(alone, "C0")
+    assert _pixels_of(both, "C1") > 0
