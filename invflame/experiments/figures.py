@@ -85,8 +85,9 @@ def loss_curves(runs: dict[str, Path], path) -> Path:
     return Path(path)
 
 
-def spectrum_and_image(folder, path, n_cameras: int = 4) -> Path:
-    """Measured vs simulated spectrum of the brightest pixel, and camera 1's band image."""
+def spectrum_and_image(folder, path, n_cameras: int = 4, label: str = "reconstruction") -> Path:
+    """Measured vs simulated spectrum of the brightest pixel, and camera 1's band image, of the
+    run in ``folder``, whose reconstruction the figure names ``label``."""
     data = np.load(Path(folder) / "data.npz")
     measured, simulated, eta = data["measured"], data["simulated"], data["out_wavenumber"]
     n_pixels = int(round(np.sqrt(measured.shape[0] / n_cameras)))
@@ -97,12 +98,13 @@ def spectrum_and_image(folder, path, n_cameras: int = 4) -> Path:
     image_sim = band_sim.reshape(n_cameras, n_pixels, n_pixels)[0]
     fig, axes = plt.subplots(1, 3, figsize=(14, 4))
     axes[0].plot(eta, measured[pixel], "k.-", label="measured")
-    axes[0].plot(eta, simulated[pixel], "r-", label="simulated from reconstruction")
+    axes[0].plot(eta, simulated[pixel], "r-", label=f"simulated from {label}")
     axes[0].set(xlabel="wavenumber [cm⁻¹]", ylabel="radiance [W/(m²·sr·cm⁻¹)]",
                 title=f"brightest pixel (ray {pixel})")
     axes[0].legend(fontsize=8)
     vmax = max(image.max(), image_sim.max())
-    for ax, img, title in ((axes[1], image, "measured"), (axes[2], image_sim, "simulated")):
+    for ax, img, title in ((axes[1], image, "measured"),
+                           (axes[2], image_sim, f"simulated from {label}")):
         shown = ax.imshow(img, cmap="inferno", vmin=0, vmax=vmax)
         ax.set(title=f"camera 1, {title}", xticks=[], yticks=[])
     fig.colorbar(shown, ax=axes[1:], label="band radiance [W/(m²·sr)]")
@@ -163,11 +165,12 @@ def comparison_figures(out, runs: dict[str, Path]) -> list[Path]:
 
     The field figures of :func:`field_figures` (the start of the first run, then every
     reconstruction, against the ground truth), ``loss_curves.png``, and ``spectrum_image.png``
-    (of the first run).
+    (of the first run, named in it).
     """
     out = Path(out)
     truth, estimates = run_fields(runs)
     written = field_figures(out, truth, estimates)
+    first, first_folder = next(iter(runs.items()))
     written += [loss_curves(runs, out / "loss_curves.png"),
-                spectrum_and_image(next(iter(runs.values())), out / "spectrum_image.png")]
+                spectrum_and_image(first_folder, out / "spectrum_image.png", label=first)]
     return written

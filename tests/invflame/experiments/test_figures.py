@@ -6,6 +6,7 @@ import matplotlib.colors
 import matplotlib.image
 import numpy as np
 
+from invflame.experiments import figures
 from invflame.experiments.figures import field_figures, loss_curves, loss_series, run_fields
 
 
@@ -68,3 +69,19 @@ def test_loss_curves_that_coincide_all_show(tmp_path):
     # alone, where with both solid it showed in the legend only (2 % of them)
     assert _pixels_of(both, "C0") > 0.1 * _pixels_of(alone, "C0")
     assert _pixels_of(both, "C1") > 0
+
+
+def test_the_spectrum_figure_names_the_run_it_shows(tmp_path, monkeypatch):
+    rng = np.random.default_rng(0)
+    measured = rng.random((4 * 3 * 3, 5))   # four cameras of 3 x 3 pixels, five wavenumbers
+    np.savez(tmp_path / "data.npz", measured=measured, simulated=0.9 * measured,
+             out_wavenumber=np.linspace(660.0, 700.0, 5))
+    shown = []
+    monkeypatch.setattr(figures.plt, "close", shown.append)
+    figures.spectrum_and_image(tmp_path, tmp_path / "spectrum.png", label="VG/TV")
+    (fig,) = shown
+    spectrum, _, simulated = fig.axes[:3]
+    assert [t.get_text() for t in spectrum.get_legend().get_texts()] == [
+        "measured", "simulated from VG/TV"]
+    assert simulated.get_title() == "camera 1, simulated from VG/TV"
+    assert spectrum.get_title() == f"brightest pixel (ray {int(np.argmax(measured.sum(1)))})"
