@@ -25,6 +25,7 @@ import accelerator
 from allocator import add_argument, apply
 
 from invflame.experiments import reproduce, runner
+from invflame.experiments.comparison_table import PAPER_TABLE
 
 
 def main():
@@ -64,7 +65,7 @@ def measure(args, out):
     cfg["representation"]["device"] = args.torch_device
     summary = runner.run_experiment(cfg, out / reproduce.folder_name(args.method),
                                     progress=False)
-    paper = reproduce.PAPER_TABLE[args.method]
+    paper = PAPER_TABLE[args.method]
     print(f"{args.method:>9}: {summary['seconds_per_epoch']:.2f} s per epoch "
           f"({summary['epochs']:g} epochs, {summary['iterations']} iterations), parameters "
           f"{summary['parameter_memory_mb']:.2f} MB, process peak "

@@ -2,6 +2,7 @@
 
 Usage: python benchmarks/lambda_sweep.py [--truth synthetic] [--method VG/TV]
        [--lambdas 3 10 30 100] [--model-error 6] [--tv-smoothing 0.1]
+       [--parameters fields] [--no-calibrate] [--set SECTION.KEY=VALUE ...]
        [--out results/lambda_sweep]
 
 Runs the method of ``invflame study --preset quick`` (same data, start, solver and stopping
@@ -16,6 +17,7 @@ report on another.
 import argparse
 import csv
 import json
+import tomllib
 import warnings
 from pathlib import Path
 
@@ -38,9 +40,22 @@ if __name__ == "__main__":
                              "reconstruction's): model error of sub-rays and step only")
     parser.add_argument("--tv-smoothing", type=float, default=0.0, metavar="EPS",
                         help="Huber smoothing of TV in 1/m (regularizer.tv_smoothing; 0: exact)")
+    parser.add_argument("--parameters", choices=("state-relation", "fields"),
+                        default="state-relation",
+                        help="representation.parameters: the unknowns of each point")
+    parser.add_argument("--no-calibrate", action="store_true",
+                        help="init.calibrate = false: the band tomography as it comes")
+    parser.add_argument("--set", nargs="+", default=[], metavar="SECTION.KEY=VALUE",
+                        help="other settings of the method's configuration (VALUE in TOML)")
     args = parser.parse_args()
     cfg = reproduce.method_config("quick", args.method, 0, "honest", args.truth)
+    for setting in args.set:
+        name, _, value = setting.partition("=")
+        section, _, key = name.partition(".")
+        cfg[section][key] = tomllib.loads(f"v = {value}")["v"]
     cfg["regularizer"]["tv_smoothing"] = args.tv_smoothing
+    cfg["representation"]["parameters"] = args.parameters
+    cfg["init"]["calibrate"] = not args.no_calibrate
     scene, native = runner.build_scene(cfg), runner.load_truth(cfg)
     if args.resolved:
         native = native.resample(scene.grid)
@@ -48,8 +63,9 @@ if __name__ == "__main__":
     start = runner.initial_fields(cfg, native.resample(scene.grid), scene, measurement)
     m = measurement.n_measurements
     points = []
-    print("| λ | χ²/M | Φ | MSE_T | flame MSE_T | hot-volume ratio | iterations |")
-    print("|---:|---:|---:|---:|---:|---:|---:|")
+    print("| λ | χ²/M | Φ | MSE_T | flame MSE_T | hot-volume ratio | iterations | gain | "
+          "MSE_CO2 (start) |")
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for lam in sorted(args.lambdas):
         trial = json.loads(json.dumps(cfg))
         trial["regularizer"]["lambda"] = lam
@@ -62,7 +78,9 @@ if __name__ == "__main__":
         points.append((lam, chi2, phi, summary["mse"]["T"]))
         print(f"| {lam:g} | {chi2 / m:.4g} | {phi:.4g} | {summary['mse']['T']:.5f} | "
               f"{summary['mse_flame']['T']:.4f} | {summary['hot_volume_ratio']:.2f} | "
-              f"{summary['iterations']} |", flush=True)
+              f"{summary['iterations']} | {summary['mse_initial']['T'] / summary['mse']['T']:.2f}"
+              f" | {summary['mse']['CO2']:.5f} ({summary['mse_initial']['CO2']:.5f}) |",
+              flush=True)
     lams, chi2, phi, mse = zip(*points, strict=True)
     best = lams[mse.index(min(mse))]
     print(f"best against the truth: λ = {best:g}")

@@ -248,8 +248,19 @@ SCHEMA: dict[str, Key | Section] = {
         "kind": Key(STRING, "voxel", "'voxel': values per voxel; 'neural-field': a NeRF-like "
                     "field rendered along the rays; 'neural-centres': a network evaluated at the "
                     "voxel centres", choices=("voxel", "neural-field", "neural-centres")),
-        "frequencies": _positive(INTEGER, 10, "networks: frequencies of the positional encoding "
-                                 "of each coordinate"),
+        "parameters": Key(STRING, "state-relation", "'state-relation': per point a progress "
+                          "of the methane flame (mixture fraction over its stoichiometric value) "
+                          "and a temperature factor, the fields following from the state "
+                          "relation of init.temperature_rise and init.ambient (no temperature "
+                          "without products; invflame.representations.state_relation); "
+                          "'fields': T and the three mole fractions free (the paper's)",
+                          choices=("state-relation", "fields")),
+        "factor_range": Key(numbers(2), [0.3, 2.0], "'state-relation': bounds of the "
+                            "temperature factor h (T - T0 = h x the relation's rise)",
+                            rule=LOW_HIGH),
+        "frequencies": _positive(INTEGER, 4, "networks: frequencies of the positional encoding "
+                                 "of each coordinate (the paper's 10 resolve structure far "
+                                 "finer than the voxels the fields are scored on)"),
         "hidden": _positive(INTEGER, 64, "networks: units per hidden layer"),
         "depth": _positive(INTEGER, 4, "networks: number of hidden layers (formerly 'layers', "
                            "still read with a warning)"),
@@ -267,10 +278,12 @@ SCHEMA: dict[str, Key | Section] = {
                       rule=TORCH_DEVICE),
     }),
     "regularizer": Section("the penalty Φ and its weight λ", {
-        "kind": Key(STRING, "none", "'tikhonov': mean squared gradient; 'tv': mean absolute "
-                    "gradient (anisotropic total variation) of the normalized fields",
+        "kind": Key(STRING, "tikhonov", "'tikhonov': mean squared gradient; 'tv': mean "
+                    "absolute gradient (anisotropic total variation) of the normalized fields "
+                    "(or of the state relation's progress and factor); the default with "
+                    "lambda, solver and init is the honest study's VG/Tikh.",
                     choices=("none", "tikhonov", "tv")),
-        "lambda": Key(NUMBER_OR_STRING, 1e-3, "the weight λ of Φ, or 'discrepancy' to "
+        "lambda": Key(NUMBER_OR_STRING, 30.0, "the weight λ of Φ, or 'discrepancy' to "
                       "choose it from the data", "1/Φ", choices=("discrepancy",), low=0.0),
         "scaling": Key(STRING, "chi2", "'chi2': minimize χ²/M + λΦ (noise-weighted "
                        "misfit); 'paper': the unweighted misfit per pixel + λΦ",
@@ -285,12 +298,14 @@ SCHEMA: dict[str, Key | Section] = {
                             "does not stall at large λ", "1/m", low=0.0),
     }),
     "solver": Section("the optimizer and its stopping rules", {
-        "name": Key(STRING, "adam", "a solver's name from solvers.available() (gd, adam, "
+        "name": Key(STRING, "lbfgs", "a solver's name from solvers.available() (gd, adam, "
                     "gauss-newton, pdhg, lbfgs, ...)"),
-        "iterations": _positive(INTEGER, 200, "the most iterations; stopping rules in options "
+        "iterations": _positive(INTEGER, 100, "the most iterations; stopping rules in options "
                                 "may end sooner"),
-        "options": Key(TABLE, {}, "the solver's own options and stopping rules (lr, rtol_loss, "
-                       "loss_window, rtol_x, gtol, time_budget, ...), see solvers.solve"),
+        "options": Key(TABLE, {"rtol_loss": 1e-3, "loss_window": 10},
+                       "the solver's own options and stopping rules (lr, rtol_loss, "
+                       "loss_window, rtol_x, gtol, time_budget, ...), see solvers.solve; a "
+                       "table given replaces this one whole"),
     }),
     "init": Section("the start", {
         "kind": Key(STRING, "band-tomography", "'band-tomography': from the data (band-"
@@ -300,8 +315,13 @@ SCHEMA: dict[str, Key | Section] = {
         "noise": Key(NUMBER, 0.2, "'noisy-truth': standard deviation of the noise",
                      "fraction of each field's range", low=0.0, high=1.0,
                      why="(the paper's 0.2)"),
-        "temperature_rise": _positive(NUMBER, 1500.0, "'band-tomography': flame-sheet "
-                                      "temperature rise of the state relation", "K"),
+        "temperature_rise": _positive(NUMBER, 1500.0, "'band-tomography' and "
+                                      "representation.parameters = 'state-relation': flame-"
+                                      "sheet temperature rise of the state relation at factor "
+                                      "h = 1", "K"),
+        "calibrate": Key(BOOLEAN, True, "'band-tomography': fit the start's amplitude and the "
+                         "state relation's temperature factor to the spectra (two numbers, "
+                         "invflame.experiments.calibration)"),
         "ambient": Key(numbers(4), [300.0, 0.0, 0.0, 0.0], "the air around the flame: "
                        "[T, X_CO2, X_H2O, X_CH4]", "K, mol/mol", rule=AMBIENT),
     }),

@@ -65,25 +65,9 @@ import scipy.sparse
 import operators as op
 import solvers
 from invflame.experiments.initialization import AMBIENT, with_soot_field
-from invflame.phantoms.composition import (
-    AIR_O2_MOLE_FRACTION,
-    MOLAR_MASS,
-    Z_STOICHIOMETRIC,
-    burke_schumann_methane,
-    mass_to_mole_fractions,
-)
+from invflame.representations.state_relation import DEFAULT_TEMPERATURE_RISE_ST, StateRelation
 from invflame.representations.whitening import noise_weights
 from operators.planck import planck
-
-DEFAULT_TEMPERATURE_RISE_ST = 1500.0
-"""Temperature rise (K) at the stoichiometric mixture fraction of the state relation.
-
-Between the time-averaged rise of a buoyant fire's continuous flame, about 870 K for the 13 kW
-pool fire (McCaffrey 1979, :func:`invflame.phantoms.plume.mccaffrey_centreline_rise`; a lower
-bound for the flame sheet, which time-averaging mixes with air), and the adiabatic rise of
-methane–air, about 1950 K (:func:`~invflame.phantoms.composition.burke_schumann_methane`; an
-upper bound, a pool fire loses heat by radiation). On the synthetic plume at peak SNR 1000 the
-start's MSE_T stays within 0.0010–0.0012 for rises from 1200 to 1800 K."""
 
 SMOOTHING_RANGE = (1.0, 1e-7)
 """Largest and smallest smoothing weight μ (dimensionless) the discrepancy principle tries."""
@@ -135,13 +119,14 @@ def lean_branch(temperature_rise_st: float = DEFAULT_TEMPERATURE_RISE_ST, ambien
     carrying the ambient mole fractions of CO2, H2O and CH4 as inert diluents, and burns
     completely (:func:`~invflame.phantoms.composition.burke_schumann_methane`, applied to the
     fuel and the dry air). The temperature rise is the Burke–Schumann one diluted by the
-    mass share of the diluents.
+    mass share of the diluents: the states of
+    :class:`~invflame.representations.state_relation.StateRelation` at factor 1.
 
     Parameters
     ----------
     temperature_rise_st : float, optional
         Temperature rise in K at the stoichiometric mixture of fuel and dry air
-        (default :data:`DEFAULT_TEMPERATURE_RISE_ST`).
+        (default :data:`~invflame.representations.state_relation.DEFAULT_TEMPERATURE_RISE_ST`).
     ambient : array_like, shape (4,), optional
         Ambient air: T in K, then mole fractions of CO2, H2O, CH4 (default
         :data:`invflame.experiments.initialization.AMBIENT`).
@@ -156,33 +141,11 @@ def lean_branch(temperature_rise_st: float = DEFAULT_TEMPERATURE_RISE_ST, ambien
     states : ndarray, shape (4, n_points)
         T in K and mole fractions of CO2, H2O, CH4 along the branch.
     """
-    ambient = np.asarray(ambient, dtype=np.float64)
-    if ambient.shape != (4,) or ambient[0] <= 0 or np.any(ambient[1:] < 0) \
-            or ambient[1:].sum() >= 1:
-        raise ValueError("ambient must be (T [K] > 0, X_CO2, X_H2O, X_CH4) with mole fractions "
-                         f">= 0 summing below 1, got {ambient.tolist()}")
-    if not temperature_rise_st > 0:
-        raise ValueError(f"temperature_rise_st must be positive (K), got {temperature_rise_st}")
     if int(n_points) != n_points or n_points < 2:
         raise ValueError(f"n_points must be an integer >= 2, got {n_points}")
-    diluents = ("CO2", "H2O", "CH4")
-    dry = 1.0 - ambient[1:].sum()
-    air_moles = {"O2": AIR_O2_MOLE_FRACTION * dry, "N2": (1 - AIR_O2_MOLE_FRACTION) * dry,
-                 **dict(zip(diluents, ambient[1:], strict=True))}
-    air_mass = {s: x * MOLAR_MASS[s] for s, x in air_moles.items()}
-    air_total = sum(air_mass.values())
-    dry_share = (air_mass["O2"] + air_mass["N2"]) / air_total  # mass share of dry air in air
-
-    z_dry = np.linspace(0.0, Z_STOICHIOMETRIC, int(n_points))  # of fuel + dry air
-    mixture_fraction = z_dry * dry_share / (1.0 - z_dry * (1.0 - dry_share))
-    burnt = mixture_fraction + (1.0 - mixture_fraction) * dry_share  # mass of fuel + dry air
-    temperature, mass = burke_schumann_methane(z_dry, temperature_rise_st, ambient[0])
-    mass = {s: burnt * y for s, y in mass.items()}
-    for s in diluents:
-        mass[s] = mass[s] + (1.0 - mixture_fraction) * air_mass[s] / air_total
-    moles = mass_to_mole_fractions(mass, MOLAR_MASS)
-    temperature = ambient[0] + burnt * (temperature - ambient[0])
-    return mixture_fraction, np.stack([temperature] + [moles[s] for s in diluents])
+    relation = StateRelation(ambient, temperature_rise_st, factor_range=(1.0, 1.0))
+    progress = np.linspace(0.0, 1.0, int(n_points))
+    return relation.mixture_fraction(progress), np.stack(relation.states(progress))
 
 
 def channel_emission(scene, states, length: float | None = None) -> np.ndarray:
@@ -470,8 +433,9 @@ def band_tomography_start(scene, data, sigma=None,
         unknown): the fixed :data:`DEFAULT_SMOOTHING`.
     temperature_rise_st : float, optional
         Temperature rise in K at stoichiometry of the state relation (default
-        :data:`DEFAULT_TEMPERATURE_RISE_ST`); ``ambient[0] + temperature_rise_st`` must lie
-        inside the absorption table's temperature range.
+        :data:`~invflame.representations.state_relation.DEFAULT_TEMPERATURE_RISE_ST`);
+        ``ambient[0] + temperature_rise_st`` must lie inside the absorption table's
+        temperature range.
     ambient : array_like, shape (4,), optional
         Ambient air around the flame: T in K and mole fractions of CO2, H2O, CH4 (default
         :data:`~invflame.experiments.initialization.AMBIENT`). Its simulated spectra are

@@ -9,6 +9,7 @@ import torch
 
 from invflame.representations.neural import NeuralCentresRepresentation, NeuralFieldRepresentation
 from invflame.representations.normalization import physical_bounds
+from invflame.representations.state_relation import StateRelation
 from invflame.representations.voxel import VoxelRepresentation
 from invflame.scene import Scene
 
@@ -45,12 +46,23 @@ def torch_device(name: str) -> str:
     return name
 
 
+def state_relation(cfg: dict, scene: Scene) -> StateRelation:
+    """The methane state relation of a configuration: ``init.ambient``,
+    ``init.temperature_rise`` (K), ``representation.factor_range``, and the scene's absorption
+    table's highest temperature (K) as the hottest state."""
+    return StateRelation(cfg["init"]["ambient"], cfg["init"]["temperature_rise"],
+                         cfg["representation"]["factor_range"], _t_range(scene)[1])
+
+
 def make_representation(cfg: dict, scene: Scene):
-    """The representation named by ``representation.kind`` on the scene; for the networks,
-    torch's default device set to ``representation.device`` first (:func:`torch_device`)."""
+    """The representation named by ``representation.kind`` on the scene, parameterized as
+    ``representation.parameters`` says; for the networks, torch's default device set to
+    ``representation.device`` first (:func:`torch_device`)."""
     settings, kind = cfg["representation"], cfg["representation"]["kind"]
+    relation = (state_relation(cfg, scene) if settings["parameters"] == "state-relation"
+                else None)
     network = {"n_frequencies": settings["frequencies"], "hidden": settings["hidden"],
-               "depth": settings["depth"], "seed": cfg["seed"]}
+               "depth": settings["depth"], "seed": cfg["seed"], "state_relation": relation}
     if kind != "voxel":
         device = torch.device(torch_device(settings["device"]))
         if device != torch.get_default_device():
@@ -63,7 +75,8 @@ def make_representation(cfg: dict, scene: Scene):
         return NeuralCentresRepresentation(scene, **network)
     return VoxelRepresentation(scene.grid, scene.operator, temperature_range=_t_range(scene),
                                soot_max=cfg["soot"]["max"],
-                               tv_smoothing=cfg["regularizer"]["tv_smoothing"])
+                               tv_smoothing=cfg["regularizer"]["tv_smoothing"],
+                               state_relation=relation)
 
 
 def starting_parameters(cfg: dict, representation, start: np.ndarray, progress: bool):

@@ -18,10 +18,13 @@ Protocols
     What a researcher with real cameras can do (``invflame study``): start from the data
     (band-integrated tomography, :mod:`invflame.experiments.data_start`), data rendered on the
     truth's native grid with more sub-rays and a finer line-by-line step plus FTIR noise
-    (:mod:`invflame.experiments.measurement`), λ on the noise-weighted scale, chosen from the
-    data for the voxel rows (:data:`HONEST_RULE`) and fixed for the neural ones
-    (:data:`HONEST_LAMBDA`), each method run until its objective stops falling
-    (:data:`HONEST_SOLVERS`), and the table says how many iterations that took.
+    (:mod:`invflame.experiments.measurement`), the start's amplitude and the flame's heat per
+    product fitted to the spectra (:mod:`invflame.experiments.calibration`), every point
+    parameterized by the methane state relation
+    (:mod:`invflame.representations.state_relation`), λ on the noise-weighted scale, tuned
+    on flames the study does not report on (:data:`HONEST_LAMBDA`), each method run until its
+    objective stops falling (:data:`HONEST_SOLVERS`), and the table says how many iterations
+    that took.
 
 Presets
 -------
@@ -42,21 +45,13 @@ from pathlib import Path
 
 from invflame.atomic_files import read_json, write_csv, write_json, write_text
 from invflame.experiments import config as configuration
-from invflame.experiments.initialization import ambient
-from invflame.experiments.machine import in_words
-from invflame.experiments.metrics import field_scores, smoothed
+from invflame.experiments.comparison_table import (
+    baseline_rows,
+    findings,
+    markdown_table,
+    table_rows,
+)
 from invflame.field import Field
-
-PAPER_TABLE = {
-    # method: epoch [ms], memory [MB], MSE_T, MSE_CO2, MSE_H2O (2000 epochs, GPU)
-    "VG/NR": (430, 3.0, 0.0295, 0.0436, 0.0416),
-    "VG/Tikh.": (432, 3.0, 0.0203, 0.0391, 0.0384),
-    "VG/TV": (431, 3.0, 0.0121, 0.0219, 0.0197),
-    "NN/NR": (479, 65.0, 0.0571, 0.0871, 0.2569),
-    "NN/Tikh.": (489, 66.0, 0.0268, 0.0705, 0.0946),
-    "NN/TV": (493, 66.0, 0.0754, 0.1427, 0.4356),
-}
-"""Table 1 of the study: time per epoch (ms), memory (MB), normalized MSE of T, CO2, H2O."""
 
 METHODS = {
     "VG/NR": ("voxel", "none"),
@@ -85,32 +80,46 @@ stopped when the objective falls by less than 0.1 % over 10 iterations; the netw
 pixel batches, as the paper trains it, stopped when it falls by less than 0.1 % over 20
 iterations (pixel batches)."""
 
-HONEST_LAMBDA = {"none": 0.0, "tikhonov": 1.0, "tv": 30.0}
-r"""Fixed λ of the honest protocol's neural rows per regularizer, on the noise-weighted scale
-(:math:`\chi^2/M + \lambda\Phi`), chosen on the synthetic plume, never on the pool fire: TV's
-is the best of a voxel sweep over 3, 10, 30, 100 at the quick size (``docs/honest.md``);
-Tikhonov's makes :math:`\lambda\Phi` of the plume's true fields (Φ ≈ 13 m⁻², against
-0.62 m⁻¹ for TV) of the same order as TV's. The voxel rows choose λ from the data instead
-(:data:`HONEST_RULE`); a network would be trained once per trial λ, which the quick preset
-cannot afford."""
+UNCALIBRATED = "band_tomography.npz"
+"""The comparison folder's file of the start before calibration
+(:func:`invflame.experiments.calibration.calibrate_start`), a baseline row of its own."""
 
-HONEST_RULE = {"lambda": "discrepancy", "tau": "model-error"}
-"""How the honest protocol's regularized voxel rows choose λ: the discrepancy principle with
-τ = 1 + the model error of prior flames (:mod:`invflame.experiments.model_error`), which needs
-no truth."""
+HONEST_LAMBDA = {
+    "voxel": {"none": 0.0, "tikhonov": 30.0, "tv": 300.0},
+    "neural-field": {"none": 0.0, "tikhonov": 1.0, "tv": 30.0},
+}
+r"""Fixed λ of the honest protocol per representation and regularizer, on the noise-weighted
+scale (:math:`\chi^2/M + \lambda\Phi`), chosen on the tuning half of the validation family
+and never on a flame the study reports on (``benchmarks/validation.py``,
+``docs/validation.md``). Voxels, with the state relation and the calibrated start: the λ of
+the sweeps 30, 100, 300 (Tikhonov) and 10, 30, 100, 300 (TV) with the largest geometric mean
+of the gain over the start on the pool fire's LES at t = 1.2 and 2 s (``python
+benchmarks/lambda_sweep.py --truth runs/validation/poolfire_u0.01_t1.2.npz --method VG/Tikh.
+--lambdas 30 100 300``, and the same for the other flame and for VG/TV). Networks: TV's the
+best of a voxel sweep on the synthetic plume, Tikhonov's making :math:`\lambda\Phi` of the
+plume's true fields of TV's order (a network trained once per trial λ is more than the quick
+preset affords).
 
-HONEST_LAMBDA_RANGE = {"tikhonov": [0.1, 1e4], "tv": [1.0, 1e5]}
-"""The range (1/Φ) in which :data:`HONEST_RULE` searches, per regularizer: from over-smoothing
-down to below the fixed λ of :data:`HONEST_LAMBDA`, ten-fold steps, so that a ladder of at
-most six solves brackets the choice."""
+The discrepancy principle (``regularizer.lambda = "discrepancy"``) stays available, but not
+here: with the state relation the fits reach χ²/M of 2–35 at these weights, far below the
+model error of prior flames (τ ≈ 157 on the quick scene, :mod:`invflame.experiments.
+model_error`), which the voxels largely absorb, so that rule smooths far too much."""
 
 PROTOCOLS = {
     "paper": {"init": {"kind": "noisy-truth", "noise": 0.2}, "rig": {"rays_per_pixel": 1},
-              "data": {"inverse_crime": True}, "noise": {"kind": "none"}},
+              "data": {"inverse_crime": True}, "noise": {"kind": "none"},
+              "representation": {"parameters": "fields", "frequencies": 10}},
     "honest": {"init": {"kind": "band-tomography"}, "data": {"inverse_crime": False},
                "noise": {"kind": "nesr"}},
 }
-"""Configuration sections that make each protocol (see the module docstring)."""
+"""Configuration sections that make each protocol (see the module docstring). The paper's
+networks encode position with 10 frequencies; the honest ones with the default 4: their finest,
+2³ periods over the box, stays coarser than the voxels they are scored on; with 10 the
+fitted network's values at the voxel centres alias its finer structure (on the tuning flame
+``poolfire_u0.01_t1.2``, NN/Tikh.: MSE_T 0.0347 against its start's 0.0072 with 10, 0.0081
+against 0.0066 with 4; ``python benchmarks/lambda_sweep.py --truth
+runs/validation/poolfire_u0.01_t1.2.npz --method NN/Tikh. --lambdas 1 --set
+representation.frequencies=4``)."""
 
 PRESETS = {
     "paper": {"truth": {"grid": 60}, "rig": {"pixels": 32}, "spectrum": {"step": 0.04},
@@ -159,13 +168,11 @@ def method_config(preset: str, method: str, seed: int = 0, protocol: str = "pape
         weight = {"lambda": 1e-3, "scaling": "paper"}
     else:
         solver = HONEST_SOLVERS[representation]
-        weight = {"lambda": HONEST_LAMBDA[regularizer], "scaling": "chi2"}
-        if representation == "voxel" and regularizer != "none":
-            weight.update(HONEST_RULE, lambda_range=HONEST_LAMBDA_RANGE[regularizer])
+        weight = {"lambda": HONEST_LAMBDA[representation][regularizer], "scaling": "chi2"}
         epochs = honest_epochs.get(representation, epochs)
     settings.update({
         "seed": seed,
-        "representation": {"kind": representation},
+        "representation": {**settings.get("representation", {}), "kind": representation},
         "regularizer": {"kind": regularizer, **weight},
         "solver": {"name": solver["name"], "iterations": epochs,
                    "options": dict(solver["options"])},
@@ -176,155 +183,6 @@ def method_config(preset: str, method: str, seed: int = 0, protocol: str = "pape
 def folder_name(method: str) -> str:
     """File-system name of a method's run folder (``VG/Tikh.`` → ``VG-Tikh``)."""
     return method.replace("/", "-").rstrip(".")
-
-
-def _scores_row(label: str, scores: dict, kind: str) -> dict:
-    mse, flame = scores["mse"], scores["mse_flame"]
-    return {"method": label, "kind": kind, "MSE_T": mse["T"], "MSE_CO2": mse["CO2"],
-            "MSE_H2O": mse["H2O"], "MSE_T_flame": flame.get("T"),
-            "hot_volume_ratio": scores["hot_volume_ratio"]}
-
-
-def table_rows(summaries: dict[str, dict]) -> list[dict]:
-    """One row per method: our figures and the paper's, side by side."""
-    rows = []
-    for method, summary in summaries.items():
-        paper = PAPER_TABLE[method]
-        seconds = summary["seconds_per_epoch"]
-        start_t = summary["mse_initial"]["T"]
-        rows.append({
-            **_scores_row(method, summary, "method"),
-            "lambda": summary["lambda"],
-            "lambda_from_data": isinstance(summary["config"]["regularizer"]["lambda"], str),
-            "iterations": summary["iterations"],
-            "converged": summary["converged"],
-            "chi2_per_measurement": summary["chi2_per_measurement"]["final"],
-            "MSE_T_initial": start_t,
-            "improvement_T": start_t / summary["mse"]["T"] if summary["mse"]["T"] > 0 else None,
-            "epoch_ms": None if seconds is None else round(1e3 * seconds, 1),
-            "machine": in_words(summary.get("machine")),
-            "param_mem_MB": round(summary["parameter_memory_mb"], 2),
-            "paper_epoch_ms": paper[0],
-            "paper_mem_MB": paper[1],
-            "paper_MSE_T": paper[2],
-            "paper_MSE_CO2": paper[3],
-            "paper_MSE_H2O": paper[4],
-        })
-    return rows
-
-
-def baseline_rows(truth: Field, start: Field, protocol: str, air) -> list[dict]:
-    """Rows that fit no data: the start, the start smoothed (Gaussian, σ = 1 voxel), ambient air.
-
-    Under the honest protocol the start is made from the data, so it and its smoothing are
-    labelled ``start`` (they use the data) and only ambient air is a no-data baseline; under the
-    paper's, the start is the truth plus noise, and all three fit no data. ``air``: the
-    ambient air, T in K and mole fractions of CO2, H2O, CH4.
-    """
-    kind = "uses the data" if protocol == "honest" else "no data; knows the truth"
-    fields = {"start": (start.values, kind),
-              "start smoothed (σ = 1 voxel)": (smoothed(start.values), kind),
-              "ambient air (flat)": (ambient(truth.grid.shape, air), "no data")}
-    return [_scores_row(label, field_scores(truth.values, values), what)
-            for label, (values, what) in fields.items()]
-
-
-def _cell(value, fmt: str = ".4f") -> str:
-    if value is None:
-        return "–"
-    if isinstance(value, bool):
-        return "yes" if value else "NO"
-    return f"{value:{fmt}}"
-
-
-def markdown_table(rows: list[dict], baselines: list[dict], preset: str, protocol: str,
-                   truth: str, described: dict) -> str:
-    """The comparison and its baselines as Markdown, with the truth and what made the data."""
-    lines = [
-        f"Preset `{preset}`, protocol `{protocol}`, truth `{truth}`.",
-        "",
-        *(f"- {what}: {how}" for what, how in described.items() if what != "lambda"),
-        "",
-        "λ: the regularizer's weight (on the scale of the run's `regularizer.scaling`; "
-        "marked * where the run chose it from the data by the discrepancy principle, its "
-        "trials in the run's `lambda_choice.json`). "
-        "MSE over voxel centres, each field min–max normalized by the ground truth's range; "
-        "MSE_T flame: the same over the voxels above 500 K in the truth or the estimate; hot "
-        "vol.: volume above 500 K over the truth's (near 0: the flame was lost); gain: MSE_T "
-        "of the method's own start over its final MSE_T (> 1: the data improved it); χ²/M: "
-        "noise-weighted misfit per measured value (≈ 1 fits to the noise). Paper: Table 1 "
-        "(60³, 4 × 32² px, 2000 epochs, GPU, noisy-truth start).",
-        "",
-        "| row | λ | iterations | converged | χ²/M | MSE_T | MSE_T flame | MSE_CO2 | MSE_H2O | "
-        "hot vol. | start MSE_T | gain | epoch [ms] | paper MSE_T |",
-        "|---|---:|---:|:-:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
-    ]
-    for r in rows:
-        lines.append(
-            f"| {r['method']} | {r['lambda']:.3g}{'*' if r['lambda_from_data'] else ''} | "
-            f"{r['iterations']} | {_cell(r['converged'])} | "
-            f"{_cell(r['chi2_per_measurement'], '.3g')} | {_cell(r['MSE_T'])} | "
-            f"{_cell(r['MSE_T_flame'])} | {_cell(r['MSE_CO2'])} | {_cell(r['MSE_H2O'])} | "
-            f"{_cell(r['hot_volume_ratio'], '.2f')} | {_cell(r['MSE_T_initial'])} | "
-            f"{_cell(r['improvement_T'], '.2f')} | {_cell(r['epoch_ms'], '.0f')} | "
-            f"{r['paper_MSE_T']:.4f} |")
-    for b in baselines:
-        lines.append(
-            f"| *{b['method']}* ({b['kind']}) | – | – | – | – | {_cell(b['MSE_T'])} | "
-            f"{_cell(b['MSE_T_flame'])} | {_cell(b['MSE_CO2'])} | {_cell(b['MSE_H2O'])} | "
-            f"{_cell(b['hot_volume_ratio'], '.2f')} | – | – | – | – |")
-    machines = {}
-    for r in rows:
-        machines.setdefault(r["machine"], []).append(r["method"])
-    lines += ["", "Epoch times measured on:",
-              *(f"- {', '.join(methods)}: {machine}" for machine, methods in machines.items())]
-    return "\n".join(lines) + "\n"
-
-
-def findings(rows: list[dict], baselines: list[dict]) -> str:
-    """What this run shows, each statement checked on its own numbers."""
-    by = {r["method"]: r for r in rows}
-    checks = []
-
-    def check(statement, holds):
-        checks.append(f"- {statement}: {'yes' if holds else 'NO'}")
-
-    def t(method):
-        return by[method]["MSE_T"]
-
-    no_data = [b for b in baselines if b["kind"].startswith("no data")]
-    if no_data:
-        best = min(no_data, key=lambda b: b["MSE_T"])
-        for r in rows:
-            ratio = best["MSE_T"] / r["MSE_T"]
-            check(f"{r['method']} beats the best no-data baseline ({best['method']}, MSE_T "
-                  f"{best['MSE_T']:.4f}) by {ratio:.2f}x", ratio > 1)
-    if all(m in by for m in ("VG/NR", "VG/TV", "VG/Tikh.")):
-        check("voxels: TV gives the lowest temperature error of the three (paper: yes)",
-              t("VG/TV") < min(t("VG/NR"), t("VG/Tikh.")))
-        check("voxels: Tikhonov improves on no regularizer (paper: yes)",
-              t("VG/Tikh.") < t("VG/NR"))
-    if all(m in by for m in ("NN/NR", "NN/Tikh.")):
-        check("neural field: Tikhonov improves on no regularizer (paper: yes)",
-              t("NN/Tikh.") < t("NN/NR"))
-    if all(m in by for m in ("NN/TV", "NN/Tikh.")):
-        check("neural field: TV does worse than Tikhonov (paper: yes)", t("NN/TV") > t("NN/Tikh."))
-    voxel = [m for m in by if m.startswith("VG")]
-    neural = [m for m in by if m.startswith("NN")]
-    if voxel and neural:
-        check("the best voxel method beats the best neural one (temperature; paper: yes)",
-              min(map(t, voxel)) < min(map(t, neural)))
-    lost = [m for m, r in by.items()
-            if r["hot_volume_ratio"] is not None and not 0.7 <= r["hot_volume_ratio"] <= 1.4]
-    check("every reconstruction keeps the flame (hot volume within 0.7-1.4x of the truth's)"
-          + (f"; lost or distorted: {', '.join(lost)}" if lost else ""), not lost)
-    worse = [m for m, r in by.items() if r["MSE_T"] >= r["MSE_T_initial"]]
-    check("every method improves on its own start (temperature)"
-          + (f"; worse than their start: {', '.join(worse)}" if worse else ""), not worse)
-    stopped = [m for m, r in by.items() if not r["converged"]]
-    check("every method converged before its iteration limit"
-          + (f"; stopped by the limit: {', '.join(stopped)}" if stopped else ""), not stopped)
-    return "Checked on this run:\n" + "\n".join(checks) + "\n"
 
 
 def reproduce(preset: str = "quick", out_dir="results", resume: bool = False,
@@ -371,14 +229,20 @@ def reproduce(preset: str = "quick", out_dir="results", resume: bool = False,
     configs = {m: method_config(preset, m, seed, protocol, truth) for m in methods}
     first = next(iter(configs.values()))
     begin = time.perf_counter()
+    notes = []  # what making the shared start said, for log.txt
     pending = [m for m in methods if not (resume and (out / folder_name(m) / "summary.json")
                                           .is_file())]
     if run is None and pending:  # one measurement and one start shared by the methods
         table = absorption_table(first)
         scene, native = build_scene(first, table), load_truth(first)
         measurement = measure(first, scene, native)
-        start = initial_fields(first, native.resample(scene.grid), scene, measurement)
+        start = initial_fields(first, native.resample(scene.grid), scene, measurement,
+                               log=notes.append)
         run = partial(run_experiment, table=table, measurement=measurement, start=start)
+        if first["init"]["kind"] == "band-tomography" and first["init"]["calibrate"]:
+            raw = dict(first, init=dict(first["init"], calibrate=False))
+            Field(scene.grid, initial_fields(raw, None, scene, measurement),
+                  {"source": "band tomography before calibration"}).save(out / UNCALIBRATED)
     summaries = {}
     for method, cfg in configs.items():
         folder = out / folder_name(method)
@@ -391,7 +255,9 @@ def reproduce(preset: str = "quick", out_dir="results", resume: bool = False,
     base = next((m for m in methods if m.startswith("VG")), methods[0])
     truth_field = Field.load(out / folder_name(base) / "truth.npz")
     baselines = baseline_rows(truth_field, Field.load(out / folder_name(base) / "initial.npz"),
-                              protocol, first["init"]["ambient"])
+                              protocol, first["init"]["ambient"],
+                              Field.load(out / UNCALIBRATED).resample(truth_field.grid)
+                              if (out / UNCALIBRATED).is_file() else None)
     described = summaries[base]["protocol"]
     write_csv(out / "table.csv", rows + baselines)
     write_json(out / "table.json", {"preset": preset, "protocol": protocol, "seed": seed,
@@ -402,8 +268,9 @@ def reproduce(preset: str = "quick", out_dir="results", resume: bool = False,
             + findings(rows, baselines))
     write_text(out / "table.md", text)
     comparison_figures(out, {m: out / folder_name(m) for m in methods})
-    write_text(out / "log.txt", f"preset {preset}, protocol {protocol}, truth {truth}, seed "
-               f"{seed}, methods {methods}, {time.perf_counter() - begin:.1f} s\n")
+    write_text(out / "log.txt", "".join(f"{note}\n" for note in notes)
+               + f"preset {preset}, protocol {protocol}, truth {truth}, seed {seed}, methods "
+               f"{methods}, {time.perf_counter() - begin:.1f} s\n")
     if progress:
         print(text)
     return rows

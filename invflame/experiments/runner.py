@@ -55,6 +55,7 @@ import solvers
 from invflame.atomic_files import read_json, write_csv, write_json, write_npz, write_text
 from invflame.background import background_from_config
 from invflame.experiments import config as configuration
+from invflame.experiments.calibration import calibrate_start
 from invflame.experiments.data_start import band_tomography_start
 from invflame.experiments.initialization import ambient, noisy_truth, with_soot_field
 from invflame.experiments.inputs import absorption_table, load_truth, read_data
@@ -69,6 +70,7 @@ from invflame.experiments.parameters import (
     make_representation,
     physical_fields,
     starting_parameters,
+    state_relation,
 )
 from invflame.experiments.regularization import choose_lambda, regularizer_weight
 from invflame.experiments.resume import (
@@ -196,22 +198,34 @@ def measure(cfg: dict, scene: Scene, truth: Field) -> Measurement:
                                             "soot_peak_volume_fraction": soot})
 
 
-def initial_fields(cfg: dict, truth: Field, scene: Scene, measurement: Measurement) -> np.ndarray:
+def initial_fields(cfg: dict, truth: Field, scene: Scene, measurement: Measurement,
+                   log=None) -> np.ndarray:
     """Starting fields ``scene.field_shape`` on the reconstruction grid: from the data (band
-    tomography, masked values left out), ambient air, or the paper's noisy truth (``truth``
-    on the reconstruction grid). When the scene reconstructs soot, the data-driven and
-    ambient starts hold none (f_v = 0), the noisy truth its soot with the same noise (none
-    for a soot-free truth)."""
+    tomography, masked values left out; with ``init.calibrate`` its amplitude and the state
+    relation's temperature factor then fitted to the spectra,
+    :func:`~invflame.experiments.calibration.calibrate_start`), ambient air, or the paper's
+    noisy truth (``truth`` on the reconstruction grid). When the scene reconstructs soot, the
+    data-driven and ambient starts hold none (f_v = 0), the noisy truth its soot with the same
+    noise (none for a soot-free truth). ``log``, when given, receives a line on the
+    calibration."""
     init = cfg["init"]
     if init["kind"] == "ambient":
         start = ambient(scene.grid.shape, init["ambient"])
     elif init["kind"] == "band-tomography":
         measured = np.isfinite(np.broadcast_to(measurement.sigma, measurement.data.shape))
-        start = band_tomography_start(scene, measurement.data,
-                                      sigma=measurement.sigma if measurement.noisy else None,
+        sigma = measurement.sigma if measurement.noisy else None
+        start = band_tomography_start(scene, measurement.data, sigma=sigma,
                                       temperature_rise_st=init["temperature_rise"],
                                       ambient=init["ambient"], measured=measured
                                       ).astype(np.float32)
+        if init["calibrate"]:
+            calibration = calibrate_start(scene, measurement.data,
+                                          with_soot_field(start, scene.soot_input),
+                                          state_relation(cfg, scene), sigma)
+            start = calibration.fields
+            if log is not None:
+                log("start calibrated to the spectra: " + ", ".join(
+                    f"{k} {v:.4g}" for k, v in calibration.as_dict().items()))
     else:
         start = noisy_truth(truth.values, init["noise"], seed=cfg["seed"])
     return with_soot_field(start, scene.soot_input)
@@ -310,7 +324,7 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
     log("; ".join(f"{k}: {v}" for k, v in described.items()))
     coverage = ray_coverage(scene.segments, scene.rig, None if truth is None else truth.values[0])
     if start is None:
-        start = initial_fields(cfg, truth, scene, measurement)
+        start = initial_fields(cfg, truth, scene, measurement, log)
 
     representation = make_representation(cfg, scene)
     machine = describe_machine(uses_torch=representation.kind != "voxel")

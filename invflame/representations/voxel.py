@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import jax.numpy as jnp
 import numpy as np
 
 import operators as op
@@ -9,6 +10,7 @@ import solvers
 from invflame.geometry import VoxelGrid
 from invflame.representations.normalization import (
     SOOT_MAX,
+    SOOT_SCALE,
     denormalize,
     field_scales,
     normalize,
@@ -16,6 +18,7 @@ from invflame.representations.normalization import (
     physical_bounds,
 )
 from invflame.representations.protocol import Representation
+from invflame.representations.state_relation import StateRelation
 from invflame.representations.whitening import whitened
 
 REGULARIZERS = ("none", "tikhonov", "tv")
@@ -54,7 +57,9 @@ def regularizer_for(kind: str, grid: VoxelGrid, n_fields: int = 4, tv_smoothing:
 
 class VoxelRepresentation(Representation):
     r"""Normalized fields per voxel as the unknowns: :math:`\theta = u = f / s` (see
-    :mod:`invflame.representations.normalization`).
+    :mod:`invflame.representations.normalization`); or, with a ``state_relation``, the
+    progress and temperature factor :math:`\theta = (s, h)` per voxel from which the fields
+    follow (:mod:`invflame.representations.state_relation`).
 
     Parameters
     ----------
@@ -74,6 +79,12 @@ class VoxelRepresentation(Representation):
     tv_smoothing : float, optional
         Huber smoothing of the TV regularizer in 1/m (:func:`regularizer_for`); 0 (default):
         exact TV.
+    state_relation : StateRelation, optional
+        Parameterize each voxel by its progress :math:`s \in [0, 1]` and temperature factor
+        :math:`h` (two fields, both of order 1, regularized like the four), the fields being
+        ``state_relation.states(s, h)``, and with soot its normalized volume fraction a third
+        field; None (default): the normalized fields. Its ``temperature_max`` should not
+        exceed ``temperature_range[1]``.
     """
 
     kind = "voxel"
@@ -81,26 +92,46 @@ class VoxelRepresentation(Representation):
 
     def __init__(self, grid: VoxelGrid, forward: op.Operator,
                  temperature_range=(250.0, 2500.0), soot_max: float = SOOT_MAX,
-                 tv_smoothing: float = 0.0):
+                 tv_smoothing: float = 0.0, state_relation: StateRelation | None = None):
         if tuple(forward.dims) not in ((4, *grid.shape), (5, *grid.shape)):
             raise ValueError(f"forward map takes {forward.dims}, expected {(4, *grid.shape)} "
                              f"(or 5 fields with soot) for a {grid.shape} grid")
-        dims = tuple(forward.dims)
         self.grid = grid
-        self.dims = dims
         self.tv_smoothing = float(tv_smoothing)
-        self.forward = forward @ op.Diagonal(per_field(field_scales(dims[0]), dims),
-                                             dtype=forward.dtype, name="denormalize")
-        bounds = physical_bounds(*temperature_range, soot_max if dims[0] == 5 else None)
-        self.lower, self.upper = (per_field(normalize(bound), dims) for bound in bounds)
+        self.state_relation = state_relation
+        self.field_dims = tuple(forward.dims)
+        n_fields = forward.dims[0]
+        bounds = physical_bounds(*temperature_range, soot_max if n_fields == 5 else None)
+        lower, upper = (normalize(bound) for bound in bounds)
+        if state_relation is None:
+            dims = tuple(forward.dims)
+            self.forward = forward @ op.Diagonal(per_field(field_scales(n_fields), dims),
+                                                 dtype=forward.dtype, name="denormalize")
+        else:  # (s, h) and, with soot, its normalized volume fraction
+            dims = (n_fields - 2, *grid.shape)
+            self.forward = forward @ op.JaxOperator(
+                lambda theta: jnp.concatenate([jnp.stack(state_relation.states(theta[0],
+                                                                               theta[1])),
+                                               theta[2:] * SOOT_SCALE]),
+                dims, forward.dims, dtype=forward.dtype, name="state relation")
+            low, high = state_relation.factor_range
+            lower = np.concatenate([[0.0, low], lower[4:]])
+            upper = np.concatenate([[state_relation.progress_max, high], upper[4:]])
+        self.dims = dims
+        self.lower, self.upper = (np.broadcast_to(b.reshape(-1, 1, 1, 1), dims)
+                                  for b in (lower, upper))
 
     def initial_parameters(self, fields) -> np.ndarray:
         """Parameters for physical fields ``(4, nx, ny, nz)`` (``(5, nx, ny, nz)`` with soot),
         clipped to the bounds."""
         fields = np.asarray(fields)
-        if fields.shape != self.dims:
-            raise ValueError(f"fields must have shape {self.dims}, got {fields.shape}")
-        return np.clip(normalize(fields), self.lower, self.upper).astype(self.forward.dtype)
+        if fields.shape != self.field_dims:
+            raise ValueError(f"fields must have shape {self.field_dims}, got {fields.shape}")
+        values = normalize(fields)
+        if self.state_relation is not None:
+            values = np.concatenate([np.stack(self.state_relation.invert(fields[:4])),
+                                     values[4:]])
+        return np.clip(values, self.lower, self.upper).astype(self.forward.dtype)
 
     def problem(self, data, regularizer: str = "none", lam: float = 1e-3,
                 x0=None, sigma=None) -> solvers.Problem:
@@ -134,4 +165,9 @@ class VoxelRepresentation(Representation):
     def fields(self, theta) -> np.ndarray:
         """Physical fields ``(4, nx, ny, nz)`` (T in K, mole fractions; with soot a fifth,
         the soot volume fraction) at voxel centres."""
-        return denormalize(np.asarray(theta).reshape(self.dims))
+        theta = np.asarray(theta).reshape(self.dims)
+        if self.state_relation is None:
+            return denormalize(theta)
+        gas = np.stack(self.state_relation.states(theta[0].astype(np.float64),
+                                                  theta[1].astype(np.float64)))
+        return np.concatenate([gas, theta[2:] * SOOT_SCALE])

@@ -24,6 +24,7 @@ from invflame.representations.neural.network import FieldNetwork, centre_points,
 from invflame.representations.neural.regularizers import regularizer_after
 from invflame.representations.normalization import field_scales, per_field
 from invflame.representations.protocol import Representation
+from invflame.representations.state_relation import StateRelation
 from invflame.representations.whitening import whitened
 from operators import Diagonal, Operator, TorchOperator
 
@@ -43,6 +44,9 @@ class NeuralCentresRepresentation(Representation):
     forward : operators.Operator, optional
         Voxel forward map from physical fields ``(4, nx, ny, nz)`` to data (default the
         scene's).
+    state_relation : StateRelation, optional
+        The network outputs this relation's progress and temperature factor
+        (:class:`FieldNetwork`); None (default): the four fields.
     """
 
     kind = "neural-centres"
@@ -50,11 +54,13 @@ class NeuralCentresRepresentation(Representation):
     """Every solver iteration uses all pixels."""
 
     def __init__(self, scene, n_frequencies: int = 10, hidden: int = 64, depth: int = 4,
-                 seed: int = 0, forward: Operator | None = None):
+                 seed: int = 0, forward: Operator | None = None,
+                 state_relation: StateRelation | None = None):
         self.scene = scene
         self.grid = scene.grid
         self.dtype = np.dtype(scene.dtype)
-        self.network = FieldNetwork.for_scene(scene, n_frequencies, hidden, depth, seed)
+        self.network = FieldNetwork.for_scene(scene, n_frequencies, hidden, depth, seed,
+                                              state_relation)
         self.n_parameters = self.network.n_parameters
         self.centres = centre_points(scene.grid, self.network.lower.dtype)
         shape = (4, *self.grid.shape)

@@ -70,6 +70,7 @@ from invflame.representations.neural.regularizers import CentreRegularizer, regu
 from invflame.representations.neural.renderer import NeuralRenderer
 from invflame.representations.neural.sampling import PlanckMeanOpacity
 from invflame.representations.protocol import Representation
+from invflame.representations.state_relation import StateRelation
 from invflame.representations.whitening import noise_weights, whitened
 from operators import Operator, TorchOperator
 from operators.interop import to_numpy
@@ -259,6 +260,9 @@ class NeuralFieldRepresentation(Representation):
     chunk_rays : int, optional
         Pixels per rendering call, see :class:`NeuralRenderer` (default from the memory of
         a call).
+    state_relation : StateRelation, optional
+        The networks output this relation's progress and temperature factor
+        (:class:`FieldNetwork`); None (default): the four fields.
     """
 
     kind = "neural-field"
@@ -266,14 +270,15 @@ class NeuralFieldRepresentation(Representation):
     def __init__(self, scene, n_coarse: int = 64, n_fine: int = 64, batch_rays: int = 1024,
                  batch_centres: int = 4096, n_frequencies: int = 10, hidden: int = 64,
                  depth: int = 4, seed: int = 0, opacity: PlanckMeanOpacity | None = None,
-                 chunk_rays: int | None = None):
+                 chunk_rays: int | None = None, state_relation: StateRelation | None = None):
         if batch_centres < 1:
             raise ValueError(f"batch_centres must be >= 1; got {batch_centres}")
         self.scene = scene
         self.grid = scene.grid
         self.seed = int(seed)
         self.renderer = NeuralRenderer(scene, n_coarse, n_fine, batch_rays, opacity, chunk_rays)
-        network = partial(FieldNetwork.for_scene, scene, n_frequencies, hidden, depth)
+        network = partial(FieldNetwork.for_scene, scene, n_frequencies, hidden, depth,
+                          state_relation=state_relation)
         self.coarse, self.fine = network(seed=seed), network(seed=seed + 1)
         self.n_parameters = self.coarse.n_parameters + self.fine.n_parameters
         self.centres = centre_points(scene.grid, self.renderer.dtype)

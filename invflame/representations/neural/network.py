@@ -16,6 +16,12 @@ T_\min)\,\mathrm{sigmoid}(z_0)` (the absorption table's range, 250–2500 K by d
 :math:`X_s = \mathrm{sigmoid}(z_s)`. The last layer's biases start at the values giving
 :math:`T = 300` K and :math:`X_s = 0.02`, so an untrained network is close to ambient air.
 
+With a state relation (:mod:`invflame.representations.state_relation`) the network has two
+outputs instead, the progress :math:`s = s_\max\,\mathrm{sigmoid}(z_0)` and the temperature
+factor :math:`h = h_\min + (h_\max - h_\min)\,\mathrm{sigmoid}(z_1)`, and the fields are the
+relation's states: no temperature without products, so the network cannot heat transparent
+air. Its biases start at :math:`s = 10^{-3}` and :math:`h = 1` (within its bounds).
+
 The network can be evaluated with its own parameters (``network(points)``) or with any flat
 parameter vector (:meth:`FieldNetwork.evaluate`, through :func:`torch.func.functional_call`),
 which is how the representations differentiate with respect to the weights.
@@ -30,6 +36,7 @@ from tqdm import tqdm
 
 from invflame.geometry import VoxelGrid
 from invflame.representations.normalization import SCALES
+from invflame.representations.state_relation import StateRelation
 from operators.interop import TORCH_DTYPES
 
 POINTS_PER_PASS = 2**14
@@ -67,13 +74,16 @@ class FieldNetwork(torch.nn.Module):
         Seed of the weight initialization (default 0).
     dtype : torch.dtype, optional
         float32 (default) or float64.
+    state_relation : StateRelation, optional
+        Output the progress and temperature factor of this relation and return its states
+        (see the module docstring); None (default): the four fields directly.
     """
 
     n_fields = 4
 
     def __init__(self, grid: VoxelGrid, n_frequencies: int = 10, hidden: int = 64,
                  depth: int = 4, temperature_range=(250.0, 2500.0), seed: int = 0,
-                 dtype=torch.float32):
+                 dtype=torch.float32, state_relation: StateRelation | None = None):
         super().__init__()
         t_min, t_max = (float(t) for t in temperature_range)
         if not 0 < t_min < AMBIENT_START[0] < t_max:
@@ -85,15 +95,21 @@ class FieldNetwork(torch.nn.Module):
         self.grid = grid
         self.n_frequencies = int(n_frequencies)
         self.temperature_range = (t_min, t_max)
+        self.state_relation = state_relation
         widths = [3 * (1 + 2 * self.n_frequencies)] + [int(hidden)] * int(depth)
         generator = torch.Generator().manual_seed(int(seed))
         layers = []
         for n_in, n_out in zip(widths[:-1], widths[1:], strict=True):
             layers += [_linear(n_in, n_out, generator, dtype), torch.nn.ReLU()]
-        last = _linear(widths[-1], self.n_fields, generator, dtype)
+        if state_relation is None:
+            start = [(AMBIENT_START[0] - t_min) / (t_max - t_min), *AMBIENT_START[1:]]
+        else:
+            low, high = state_relation.factor_range
+            start = [1e-3 / state_relation.progress_max,
+                     min(max((1.0 - low) / (high - low), 0.01), 0.99) if high > low else 0.5]
+        last = _linear(widths[-1], len(start), generator, dtype)
         with torch.no_grad():
             last.weight.mul_(0.1)
-            start = [(AMBIENT_START[0] - t_min) / (t_max - t_min), *AMBIENT_START[1:]]
             last.bias.copy_(torch.tensor([_logit(p) for p in start], dtype=dtype))
         self.mlp = torch.nn.Sequential(*layers, last)
         self.register_buffer("lower", torch.tensor(grid.lower, dtype=dtype))
@@ -104,12 +120,12 @@ class FieldNetwork(torch.nn.Module):
 
     @classmethod
     def for_scene(cls, scene, n_frequencies: int = 10, hidden: int = 64, depth: int = 4,
-                  seed: int = 0) -> FieldNetwork:
+                  seed: int = 0, state_relation: StateRelation | None = None) -> FieldNetwork:
         """A network on a scene's grid, with its absorption table's temperature range (K) and
         its dtype (float32 or float64); the other parameters as for :class:`FieldNetwork`."""
         return cls(scene.grid, n_frequencies, hidden, depth,
                    tuple(scene.table.temperatures[[0, -1]]), seed=seed,
-                   dtype=TORCH_DTYPES[np.dtype(scene.dtype)])
+                   dtype=TORCH_DTYPES[np.dtype(scene.dtype)], state_relation=state_relation)
 
     # -- the map ------------------------------------------------------------------------------
     def encode(self, points: torch.Tensor) -> torch.Tensor:
@@ -126,11 +142,15 @@ class FieldNetwork(torch.nn.Module):
         """
         flat = points.reshape(-1, points.shape[-1])
         z = torch.cat([self.mlp(self.encode(part)) for part in torch.split(flat, POINTS_PER_PASS)])
-        z = z.reshape(*points.shape[:-1], z.shape[-1])
+        z = torch.movedim(z.reshape(*points.shape[:-1], z.shape[-1]), -1, 0)
+        if self.state_relation is not None:
+            relation = self.state_relation
+            low, high = relation.factor_range
+            s = relation.progress_max * torch.sigmoid(z[0])
+            return torch.stack(relation.states(s, low + (high - low) * torch.sigmoid(z[1])))
         t_min, t_max = self.temperature_range
-        temperature = t_min + (t_max - t_min) * torch.sigmoid(z[..., :1])
-        out = torch.cat([temperature, torch.sigmoid(z[..., 1:])], dim=-1)
-        return torch.movedim(out, -1, 0)
+        temperature = t_min + (t_max - t_min) * torch.sigmoid(z[:1])
+        return torch.cat([temperature, torch.sigmoid(z[1:])])
 
     def normalized(self, points: torch.Tensor) -> torch.Tensor:
         """Normalized fields :math:`u = f / s` at points ``(..., 3)``: shape ``(4, ...)``."""

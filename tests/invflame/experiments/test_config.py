@@ -13,7 +13,7 @@ def test_defaults_and_partial_override(tmp_path):
                     'kind = "tv"\n')
     cfg = config.load(path)
     assert cfg["solver"]["name"] == "gd" and cfg["solver"]["options"] == {"step": 0.5}
-    assert cfg["regularizer"] == {"kind": "tv", "lambda": 1e-3, "scaling": "chi2",
+    assert cfg["regularizer"] == {"kind": "tv", "lambda": 30.0, "scaling": "chi2",
                                   "lambda_range": [1e-3, 1e2], "tau": 1.0, "tv_smoothing": 0.0}
     assert cfg["rig"]["focal_length"] == 0.59
     path.write_text(config.dumps(cfg))
@@ -33,11 +33,12 @@ def test_defaults_and_partial_override(tmp_path):
         ("[init]\nambient = [300.0, 0.0]\n", r"'init.ambient' must be a list of 4 numbers"),
         ("[rig]\nrays_per_pixel = 8\n", r"'rig.rays_per_pixel' must be a perfect square"),
         ("seed = -3\n", r"'seed' must be a non-negative integer, got -3"),
-        ("[solver]\noptions = { lr = '0.01' }\n",
+        ("[solver]\nname = 'adam'\noptions = { lr = '0.01' }\n",
          r"'solver.options.lr' must be a number, got '0.01' \(write lr = 0.01 without quotes"),
         ("[solver]\noptions = { max_iter = 5 }\n",
          r"'solver.options.max_iter' clashes with 'solver.iterations'"),
-        ("[solver]\noptions = { lr = -1.0 }\n", r"'solver.options' = \{'lr': -1.0\}: .*lr"),
+        ("[solver]\nname = 'adam'\noptions = { lr = -1.0 }\n",
+         r"'solver.options' = \{'lr': -1.0\}: .*lr"),
         ("[solver]\nname = 'adamm'\n", r"'solver.name': .*Did you mean 'adam'"),
         ("[spectrum]\nstep = 100\n", r"'spectrum.step' = 100.0 cm-1 must be at most half of "
                                      r"'instrument.resolution' = 8.0"),

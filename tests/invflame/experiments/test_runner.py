@@ -10,7 +10,7 @@ import pytest
 import torch
 
 import solvers
-from invflame.experiments import config, reproduce, runner
+from invflame.experiments import comparison_table, config, reproduce, runner
 from invflame.experiments.machine import describe_machine, in_words
 from invflame.field import Field
 
@@ -87,7 +87,7 @@ def test_findings_are_true_of_the_rows():
             {"method": "VG/TV", "MSE_T": 0.004, "MSE_T_initial": 0.01, "converged": False,
              "hot_volume_ratio": 0.3}]
     baselines = [{"method": "ambient air (flat)", "kind": "no data", "MSE_T": 0.012}]
-    text = reproduce.findings(rows, baselines)
+    text = comparison_table.findings(rows, baselines)
     assert "VG/NR beats the best no-data baseline (ambient air (flat), MSE_T 0.0120) by " \
         "0.60x: NO" in text
     assert "VG/TV beats the best no-data baseline (ambient air (flat), MSE_T 0.0120) by " \
@@ -180,23 +180,22 @@ def test_a_bad_solver_leaves_a_finished_run_untouched(tmp_path):
 def test_resume_refuses_another_configuration(tmp_path):
     runner.run_experiment(tiny(), tmp_path, progress=False)
     other = tiny(regularizer={"kind": "tv", "lambda": 2.0})
-    with pytest.raises(config.ConfigError, match=r"regularizer.kind: 'none' there, 'tv' now.*"
-                                                 r"regularizer.lambda"):
+    with pytest.raises(config.ConfigError, match=r"regularizer.kind: 'tikhonov' there, 'tv' now"
+                                                 r".*regularizer.lambda"):
         runner.run_experiment(other, tmp_path, resume=True, progress=False)
     assert runner.run_experiment(tiny(), tmp_path, resume=True, progress=False)["iterations"] == 6
 
 
-def test_honest_voxel_rows_choose_lambda_from_the_data_and_neural_rows_keep_a_fixed_one():
+def test_honest_rows_keep_the_tuned_lambda_on_the_state_relation_and_paper_rows_the_papers():
     for method, (kind, regularizer) in reproduce.METHODS.items():
-        reg = reproduce.method_config("quick", method, protocol="honest")["regularizer"]
-        if kind == "voxel" and regularizer != "none":
-            assert (reg["lambda"], reg["tau"]) == ("discrepancy", "model-error"), method
-            low, high = reg["lambda_range"]
-            assert low < reproduce.HONEST_LAMBDA[regularizer] < high
-        else:
-            assert reg["lambda"] == reproduce.HONEST_LAMBDA[regularizer], method
-    paper = reproduce.method_config("quick", "VG/TV", protocol="paper")["regularizer"]
-    assert paper["lambda"] == 1e-3
+        cfg = reproduce.method_config("quick", method, protocol="honest")
+        assert cfg["regularizer"]["lambda"] == reproduce.HONEST_LAMBDA[kind][regularizer], method
+        assert cfg["regularizer"]["scaling"] == "chi2"
+        assert cfg["representation"]["parameters"] == "state-relation"
+        assert cfg["init"] == {**cfg["init"], "kind": "band-tomography", "calibrate": True}
+    paper = reproduce.method_config("quick", "VG/TV", protocol="paper")
+    assert paper["regularizer"]["lambda"] == 1e-3
+    assert paper["representation"]["parameters"] == "fields"
 
 
 def test_table_marks_the_lambdas_chosen_from_the_data():
@@ -206,7 +205,7 @@ def test_table_marks_the_lambdas_chosen_from_the_data():
            "epoch_ms": 10.0, "paper_MSE_T": 0.0121, "machine": "not recorded"}
     rows = [dict(row, **{"lambda": 1.0e4, "lambda_from_data": True}),
         dict(row, method="NN/TV", **{"lambda": 30.0, "lambda_from_data": False})]
-    text = reproduce.markdown_table(rows, [], "quick", "honest", "poolfire", {})
+    text = comparison_table.markdown_table(rows, [], "quick", "honest", "poolfire", {})
     assert "| VG/TV | 1e+04* |" in text and "| NN/TV | 30 |" in text
     assert text.startswith("Preset `quick`, protocol `honest`, truth `poolfire`.")
 
@@ -215,15 +214,15 @@ def test_table_names_the_machines_of_its_epoch_times():
     summary = {"config": {"regularizer": {"lambda": 1e-3}}, "lambda": 1e-3, "iterations": 4,
                "converged": False, "chi2_per_measurement": {"final": 1.0},
                "mse": {"T": 0.01, "CO2": 0.01, "H2O": 0.01}, "mse_flame": {"T": 0.1},
-               "hot_volume_ratio": 1.0, "mse_initial": {"T": 0.02},
+               "hot_volume_ratio": 1.0, "mse_initial": {"T": 0.02, "CO2": 0.02, "H2O": 0.02},
                "seconds_per_epoch": 0.5, "parameter_memory_mb": 3.5}
     gpu = {"processor": "a processor, 16 cores", "jax": "gpu: a GPU", "torch": None,
            "versions": {}}
-    rows = reproduce.table_rows({"VG/NR": dict(summary, machine=gpu),
+    rows = comparison_table.table_rows({"VG/NR": dict(summary, machine=gpu),
                                  "VG/TV": dict(summary, machine=gpu),
                                  "VG/Tikh.": summary})  # written before runs recorded it
     assert [r["machine"] for r in rows] == [in_words(gpu), in_words(gpu), "not recorded"]
-    text = reproduce.markdown_table(rows, [], "paper", "paper", "poolfire", {})
+    text = comparison_table.markdown_table(rows, [], "paper", "paper", "poolfire", {})
     assert ("Epoch times measured on:\n"
             "- VG/NR, VG/TV: JAX on gpu: a GPU; processor a processor, 16 cores\n"
             "- VG/Tikh.: not recorded\n") in text
@@ -256,3 +255,15 @@ def test_tv_smoothing_reaches_the_voxel_problem_and_is_refused_where_it_means_no
     with pytest.raises(config.ConfigError, match="needs 'representation.kind' = 'voxel'"):
         tiny(regularizer={"kind": "tv", "tv_smoothing": 0.1},
              representation={"kind": "neural-field"})
+
+
+def test_a_configuration_naming_only_the_truth_is_the_honest_studys_voxel_tikhonov():
+    """`invflame run` without [init], [solver], [regularizer], [representation] runs what the
+    study runs as VG/Tikh. (the sizes apart: the quick preset shrinks the cameras and the
+    line-by-line step)."""
+    given = config.validate({"truth": {"source": "poolfire"}})
+    study = reproduce.method_config("quick", "VG/Tikh.", protocol="honest")
+    for sizes in ("rig", "spectrum"):
+        study[sizes] = {**study[sizes], **{k: given[sizes][k] for k in ("pixels", "step")
+                                          if k in given[sizes]}}
+    assert given == study

@@ -93,6 +93,8 @@ def test_soot_is_reconstructed_where_the_truth_has_it(tmp_path):
     the voxel that holds it, and scored."""
     cfg = config.validate({**SMALL, "truth": {"source": "synthetic", "soot": 4e-6},
                            "grid": {"cells": [5, 6, 5]}, "soot": {"reconstruct": True},
+                           "representation": {"parameters": "fields"},
+                           "regularizer": {"kind": "none"}, "init": {"calibrate": False},
                            "solver": {"name": "adam", "iterations": 60,
                                       "options": {"lr": 0.05}}})
     summary = runner.run_experiment(cfg, tmp_path / "run", progress=False)
