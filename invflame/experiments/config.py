@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from invflame.errors import ConfigError
+from invflame.experiments.config_keys import Key, Rule, Section, ValueType, _is_number, numbers
 from invflame.experiments.config_schema import (
     CHOICES,
     DEFAULTS,
@@ -43,15 +44,9 @@ from invflame.experiments.config_schema import (
     RENAMED_KEYS,
     RENAMED_VALUES,
     SCHEMA,
-    Key,
-    Rule,
-    Section,
-    ValueType,
     _defaults,
-    _is_number,
     allowed,
     keys,
-    numbers,
 )
 from invflame.experiments.config_text import (
     COMMENT_COLUMN,

@@ -14,7 +14,8 @@ from collections.abc import Iterator
 
 import tomli_w
 
-from invflame.experiments.config_schema import DEFAULTS, SCHEMA, Key, Section, allowed, keys
+from invflame.experiments.config_keys import Key, Section
+from invflame.experiments.config_schema import DEFAULTS, SCHEMA, allowed, keys
 
 
 def dumps(config: dict) -> str:

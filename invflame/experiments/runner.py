@@ -55,9 +55,6 @@ import solvers
 from invflame.atomic_files import read_json, write_csv, write_json, write_npz, write_text
 from invflame.background import background_from_config
 from invflame.experiments import config as configuration
-from invflame.experiments.calibration import calibrate_start
-from invflame.experiments.data_start import band_tomography_start
-from invflame.experiments.initialization import ambient, noisy_truth, with_soot_field
 from invflame.experiments.inputs import absorption_table, load_truth, read_data
 from invflame.experiments.machine import describe_machine, in_words
 from invflame.experiments.measurement import (
@@ -70,7 +67,6 @@ from invflame.experiments.parameters import (
     make_representation,
     physical_fields,
     starting_parameters,
-    state_relation,
 )
 from invflame.experiments.regularization import choose_lambda, regularizer_weight
 from invflame.experiments.resume import (
@@ -81,6 +77,7 @@ from invflame.experiments.resume import (
     run_fingerprint,
 )
 from invflame.experiments.run_folder import RunLock
+from invflame.experiments.start import initial_fields
 from invflame.experiments.summaries import chi2_per_value, protocol, truth_scores
 from invflame.export import export_run
 from invflame.field import Field
@@ -196,39 +193,6 @@ def measure(cfg: dict, scene: Scene, truth: Field) -> Measurement:
                                             "truth": str(cfg["truth"]["source"]),
                                             "background": background,
                                             "soot_peak_volume_fraction": soot})
-
-
-def initial_fields(cfg: dict, truth: Field, scene: Scene, measurement: Measurement,
-                   log=None) -> np.ndarray:
-    """Starting fields ``scene.field_shape`` on the reconstruction grid: from the data (band
-    tomography, masked values left out; with ``init.calibrate`` its amplitude and the state
-    relation's temperature factor then fitted to the spectra,
-    :func:`~invflame.experiments.calibration.calibrate_start`), ambient air, or the paper's
-    noisy truth (``truth`` on the reconstruction grid). When the scene reconstructs soot, the
-    data-driven and ambient starts hold none (f_v = 0), the noisy truth its soot with the same
-    noise (none for a soot-free truth). ``log``, when given, receives a line on the
-    calibration."""
-    init = cfg["init"]
-    if init["kind"] == "ambient":
-        start = ambient(scene.grid.shape, init["ambient"])
-    elif init["kind"] == "band-tomography":
-        measured = np.isfinite(np.broadcast_to(measurement.sigma, measurement.data.shape))
-        sigma = measurement.sigma if measurement.noisy else None
-        start = band_tomography_start(scene, measurement.data, sigma=sigma,
-                                      temperature_rise_st=init["temperature_rise"],
-                                      ambient=init["ambient"], measured=measured
-                                      ).astype(np.float32)
-        if init["calibrate"]:
-            calibration = calibrate_start(scene, measurement.data,
-                                          with_soot_field(start, scene.soot_input),
-                                          state_relation(cfg, scene), sigma)
-            start = calibration.fields
-            if log is not None:
-                log("start calibrated to the spectra: " + ", ".join(
-                    f"{k} {v:.4g}" for k, v in calibration.as_dict().items()))
-    else:
-        start = noisy_truth(truth.values, init["noise"], seed=cfg["seed"])
-    return with_soot_field(start, scene.soot_input)
 
 
 def _on_grid(cfg: dict, truth: Field, grid: VoxelGrid) -> Field:
