@@ -12,8 +12,11 @@ from invflame.experiments.metrics import field_scores, psnr
 def protocol(cfg: dict, measurement: Measurement) -> dict[str, str]:
     """What made a result, in words: the start, the data, the noise and the weight λ."""
     init, data, reg = cfg["init"], cfg["data"], cfg["regularizer"]
+    calibrated = ("; amplitude and heat per product fitted to the spectra" if init["calibrate"]
+                  else "")
     starts = {"band-tomography": "data-driven (band-integrated linear tomography + "
-                                 "Burke-Schumann state relation); knows nothing of the truth",
+                                 f"Burke-Schumann state relation{calibrated}); knows nothing "
+                                 "of the truth",
               "ambient": "ambient air; knows nothing of the truth",
               "noisy-truth": f"ground truth + {init['noise']:g} relative Gaussian noise (the "
                              "paper's protocol: starts from the answer)"}
@@ -38,8 +41,12 @@ def protocol(cfg: dict, measurement: Measurement) -> dict[str, str]:
     else:
         said = (f"Gaussian, NESR {noise['nesr']} W/(m2 sr cm-1) (peak SNR "
                 f"{record['peak_snr']:.0f})")
+    parameters = {"state-relation": "per point the methane state relation's progress and "
+                                    "temperature factor",
+                  "fields": "per point T and the mole fractions"}
     return {"start": starts[init["kind"]], "data": made, "noise": said,
-            "lambda": f"{reg['lambda']} ({reg['scaling']} scaling)"}
+            "lambda": f"{reg['lambda']} ({reg['scaling']} scaling)",
+            "unknowns": parameters[cfg["representation"]["parameters"]]}
 
 
 def chi2_per_value(simulated: np.ndarray, measurement: Measurement) -> float:

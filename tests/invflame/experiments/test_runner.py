@@ -101,6 +101,8 @@ def test_run_summary_says_what_made_the_result(tmp_path):
     summary = runner.run_experiment(tiny(), tmp_path, progress=False)
     made = summary["protocol"]
     assert "knows nothing of the truth" in made["start"]
+    assert "fitted to the spectra" in made["start"]
+    assert "state relation's progress" in made["unknowns"]
     assert "60x60x60 grid, 25 sub-rays/pixel" in made["data"] and "NESR" in made["noise"]
     assert set(summary["coverage"]) == {"voxels", "common_view", "hot"}
     assert summary["coverage"]["voxels"] == 1.0  # 3 x 3 sub-rays see every voxel
