@@ -22,7 +22,7 @@ import warnings
 from pathlib import Path
 
 import solvers
-from invflame.experiments import reproduce, runner
+from invflame.experiments import config, reproduce, runner
 from invflame.experiments.model_error import estimate_model_error
 
 if __name__ == "__main__":
@@ -52,10 +52,15 @@ if __name__ == "__main__":
     for setting in args.set:
         name, _, value = setting.partition("=")
         section, _, key = name.partition(".")
+        sections = [k for k, v in cfg.items() if isinstance(v, dict)]
+        if section not in sections or not key or not value:
+            parser.error(f"--set {setting!r}: give SECTION.KEY=VALUE, SECTION one of "
+                         f"{', '.join(sections)}")
         cfg[section][key] = tomllib.loads(f"v = {value}")["v"]
     cfg["regularizer"]["tv_smoothing"] = args.tv_smoothing
     cfg["representation"]["parameters"] = args.parameters
     cfg["init"]["calibrate"] = not args.no_calibrate
+    cfg = config.validate(cfg)  # a misspelt --set key or a bad value is named here
     scene, native = runner.build_scene(cfg), runner.load_truth(cfg)
     if args.resolved:
         native = native.resample(scene.grid)

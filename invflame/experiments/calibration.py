@@ -109,13 +109,15 @@ def calibrate_start(scene, data, start, relation: StateRelation, sigma=None,
         return np.concatenate([np.stack(relation.states(s, factor)), start[4:]]
                               ).astype(start.dtype)
 
+    def chi2(fields):
+        return float(np.sum(np.square((scene.simulate(fields) - data) * weights))) / counted
+
     def misfit(point):
         nonlocal evaluations
         evaluations += 1
-        residual = (scene.simulate(fields_at(*point)) - data) * weights
-        return float(np.sum(np.square(residual))) / counted
+        return chi2(fields_at(*point))
 
-    before = float(np.sum(np.square((scene.simulate(start) - data) * weights))) / counted
+    before = chi2(start)
     x0 = np.array([0.0, min(max(1.0, low), high)])
     result = minimize(misfit, x0, method="Nelder-Mead",
                       bounds=[np.log(AMPLITUDE_RANGE), (low, high)],

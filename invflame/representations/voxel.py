@@ -110,10 +110,8 @@ class VoxelRepresentation(Representation):
         else:  # (s, h) and, with soot, its normalized volume fraction
             dims = (n_fields - 2, *grid.shape)
             self.forward = forward @ op.JaxOperator(
-                lambda theta: jnp.concatenate([jnp.stack(state_relation.states(theta[0],
-                                                                               theta[1])),
-                                               theta[2:] * SOOT_SCALE]),
-                dims, forward.dims, dtype=forward.dtype, name="state relation")
+                lambda theta: _relation_fields(state_relation, theta, jnp), dims, forward.dims,
+                dtype=forward.dtype, name="state relation")
             low, high = state_relation.factor_range
             lower = np.concatenate([[0.0, low], lower[4:]])
             upper = np.concatenate([[state_relation.progress_max, high], upper[4:]])
@@ -168,6 +166,12 @@ class VoxelRepresentation(Representation):
         theta = np.asarray(theta).reshape(self.dims)
         if self.state_relation is None:
             return denormalize(theta)
-        gas = np.stack(self.state_relation.states(theta[0].astype(np.float64),
-                                                  theta[1].astype(np.float64)))
-        return np.concatenate([gas, theta[2:] * SOOT_SCALE])
+        return _relation_fields(self.state_relation, theta.astype(np.float64), np)
+
+
+def _relation_fields(relation: StateRelation, theta, xp):
+    """Physical fields of state-relation parameters ``(s, h[, u_soot])`` per voxel, in the
+    array module ``xp`` (NumPy or ``jax.numpy``): the relation's states, then the soot volume
+    fraction from its normalized value."""
+    return xp.concatenate([xp.stack(relation.states(theta[0], theta[1])),
+                           theta[2:] * SOOT_SCALE])
