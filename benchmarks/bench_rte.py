@@ -98,9 +98,9 @@ def stages(scene: Scene, fields, repeats: int, clock: str) -> dict:
     order, n_segments = ray_order(lengths, batch_rays)
     temperature, fractions, length = batched_inputs(tables, segment_fields, lengths, order,
                                                     batch_rays)
-    index = rte_kernel._interval(tables, temperature)
+    index, interval = jax.vmap(partial(rte_kernel._locate, tables))(temperature, fractions)
     amount, offset, temp = jax.vmap(partial(rte_kernel._segment_weights, tables))(
-        index, temperature, fractions, length)
+        interval, temperature, fractions, length)
     batches = (index, amount, offset, temp)
     radiance = rte_kernel.emission_radiance(tables, segment_fields, lengths, batch_rays)
     cotangent = jnp.ones_like(radiance)

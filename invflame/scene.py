@@ -222,10 +222,8 @@ class Scene:
         sooty = self.soot is not None or self.soot_input
         if sooty and soot_constant is None:
             soot_constant = rayleigh_soot_constant()
-        return RTETables.from_spline(self.wavenumber, self.table.temperatures,
-                                     self.table.spline.coef[..., self._band], self.table.pressure,
-                                     self.dtype, self.planck,
-                                     soot=soot_constant if sooty else None)
+        return self.table.kernel_tables(self._band, self.dtype, self.planck,
+                                        soot=soot_constant if sooty else None)
 
     def _operator(self) -> KernelOperator:
         """The forward map on the scene's rays, tables, instrument and background."""

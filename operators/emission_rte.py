@@ -154,9 +154,9 @@ class EmissionRTE(KernelOperator):
         Wavenumbers in cm⁻¹.
     temperatures : array_like, shape (n_T,)
         Temperature nodes in K of the cross-section splines.
-    coef : array_like, shape (4, n_T - 1, n_species, n_eta)
+    coef : array_like, shape (4, n_T - 1, n_columns, n_eta)
         :class:`~operators.tabulated.PiecewiseCubic` coefficients of the cross-sections in
-        cm²/molecule.
+        cm²/molecule, one column per species (or per species and fraction node).
     lengths : array_like, shape (n_rays, n_seg)
         Segment lengths in m, nearest the camera first; zero on padding.
     pressure : float, optional
@@ -176,6 +176,10 @@ class EmissionRTE(KernelOperator):
         m⁻¹. Default None: no soot.
     background : array_like, shape (n_rays, n_eta) or (n_eta,), optional
         Radiance behind the far end of each ray in W/(m²·sr·cm⁻¹) (default None: none).
+    fraction_nodes : sequence of sequence of float, optional
+        Per species, the mole fractions of its columns of ``coef``: cross-sections that
+        depend on the species' own mole fraction (:meth:`RTETables.from_spline`). Default: one
+        column per species.
 
     Attributes
     ----------
@@ -193,9 +197,10 @@ class EmissionRTE(KernelOperator):
 
     def __init__(self, wavenumber, temperatures, coef, lengths, pressure: float = 101325.0,
                  dtype=np.float32, planck: str = "table", memory_budget: int | None = None,
-                 batch_rays: int | None = None, background=None, soot: float | None = None):
+                 batch_rays: int | None = None, background=None, soot: float | None = None,
+                 fraction_nodes=None):
         tables = RTETables.from_spline(wavenumber, temperatures, coef, pressure, dtype, planck,
-                                       soot=soot)
+                                       soot=soot, fraction_nodes=fraction_nodes)
         self._setup(tables, lengths, memory_budget, batch_rays, background)
 
     @classmethod

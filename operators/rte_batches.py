@@ -31,7 +31,7 @@ def batch_rays_for(tables: RTETables, n_rays: int, memory_budget: int | None = N
     Parameters
     ----------
     tables : RTETables
-        Kernel tables (give ``n_eta``, ``n_coef`` and the dtype).
+        Kernel tables (give ``n_points``, ``n_coef`` and the dtype).
     n_rays : int
         Number of rays (the batch never exceeds it).
     memory_budget : int, optional
@@ -41,7 +41,7 @@ def batch_rays_for(tables: RTETables, n_rays: int, memory_budget: int | None = N
         memory_budget = DEFAULT_MEMORY_BUDGET.get(jax.default_backend(),
                                                   DEFAULT_MEMORY_BUDGET["gpu"])
     budget = int(memory_budget)
-    per_ray = tables.n_eta * tables.dtype.itemsize * (16 + tables.coef.shape[1])
+    per_ray = tables.n_points * tables.dtype.itemsize * (16 + tables.coef.shape[1])
     return int(max(1, min(n_rays, budget // per_ray)))
 
 

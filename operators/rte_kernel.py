@@ -89,34 +89,49 @@ from operators.rte_batches import (
     segment_counts,
     spectra_batches,
 )
+from operators.rte_blocks import composition_block, fraction_weights, n_composition_blocks
 from operators.rte_sweep_cpu import target
 from operators.rte_tables import RTETables
 
 
 # -- per-segment weights and one segment's spectra --------------------------------------------
-def _interval(tables: RTETables, temperature):
-    """Index of the temperature interval of each segment (clamped to the end intervals)."""
+def _locate(tables: RTETables, temperature, fractions):
+    """Each segment's block of table rows and its temperature interval (clamped to the end
+    intervals); ``fractions`` as :func:`_segment_weights` takes them."""
     nodes = tables.nodes
-    return jnp.clip(jnp.searchsorted(nodes, temperature, side="right") - 1, 0,
-                    nodes.shape[0] - 2)
+    interval = jnp.clip(jnp.searchsorted(nodes, temperature, side="right") - 1, 0,
+                        nodes.shape[0] - 2)
+    lowers = [fraction_weights(f, fractions[s], jnp)[0]
+              for s, f in enumerate(tables.fraction_nodes) if len(f) > 1]
+    blocks = n_composition_blocks(tables.fraction_nodes)
+    return interval * blocks + composition_block(tables.fraction_nodes, lowers, jnp), interval
 
 
-def _segment_weights(tables: RTETables, index, temperature, fractions, length):
+def _segment_weights(tables: RTETables, interval, temperature, fractions, length):
     r"""The scalars per segment that the spectra depend on.
 
-    For segments shaped ``s`` (``temperature`` in K, ``length`` in m; ``fractions`` is
-    ``(n_absorbing, *s)``, the soot volume fraction last when the tables have soot): the
-    amounts ``(*s, n_gas [+ 1])``, :math:`X_s \Delta s / T` (m/K; the table rows carry
-    :math:`\sigma p 10^{-4}/k_B`) and the soot's :math:`f_v \Delta s` (m); the offset
-    :math:`u \in [0, 1]` in the temperature interval ``(*s,)``; and the temperature ``(*s,)``
-    in K, which the exact Planck law takes.
+    For segments shaped ``s`` (``temperature`` in K, ``length`` in m, ``interval`` the
+    temperature interval of :func:`_locate`; ``fractions`` is ``(n_absorbing, *s)``, the soot
+    volume fraction last when the tables have soot): the amounts ``(*s, n_slots [+ 1])``, per
+    gas slot :math:`X_s \Delta s / T` (m/K; the table rows carry :math:`\sigma p 10^{-4}/k_B`),
+    split as :math:`X_s (1 - w_s)` and :math:`X_s w_s` between the nodes either side of a
+    species with several fraction nodes (:func:`operators.rte_blocks.fraction_weights`), and
+    the soot's :math:`f_v \Delta s` (m); the offset :math:`u \in [0, 1]` in the temperature
+    interval ``(*s,)``; and the temperature ``(*s,)`` in K, which the exact Planck law takes.
     """
-    offset = (temperature - tables.nodes[index]) * tables.inv_width[index]
-    gas = fractions[:-1] if tables.soot else fractions
-    amount = gas * (length / temperature)
+    offset = (temperature - tables.nodes[interval]) * tables.inv_width[interval]
+    per_length = length / temperature
+    amount = []
+    for s, nodes in enumerate(tables.fraction_nodes):
+        gas = fractions[s] * per_length
+        if len(nodes) > 1:
+            weight = fraction_weights(nodes, fractions[s], jnp)[1]
+            amount += [gas - gas * weight, gas * weight]
+        else:
+            amount.append(gas)
     if tables.soot:
-        amount = jnp.concatenate([amount, (fractions[-1] * length)[None]])
-    return jnp.moveaxis(amount, 0, -1), offset, temperature
+        amount.append(fractions[-1] * length)
+    return jnp.stack(amount, axis=-1), offset, temperature
 
 
 def _cubic(tables: RTETables, index, offset, row: int):
@@ -201,7 +216,7 @@ def _sweep(tables: RTETables, index, amount, offset, temperature, n_segments, ba
         return transmittance * radiance + emission * absorptance
 
     if background is None:
-        background = jnp.zeros((index.shape[-1], tables.n_eta), tables.dtype)
+        background = jnp.zeros((index.shape[-1], tables.n_points), tables.dtype)
     return jax.lax.fori_loop(0, n_segments, step, background)
 
 
@@ -249,18 +264,18 @@ def _sweep_vjp(tables: RTETables, index, amount, offset, temperature, n_segments
 
 def _batch_radiance(tables: RTETables, temperature, fractions, length, n_segments,
                     background=None):
-    index = _interval(tables, temperature)
-    return _sweep(tables, index,
-                  *_segment_weights(tables, index, temperature, fractions, length), n_segments,
-                  background)
+    block, interval = _locate(tables, temperature, fractions)
+    return _sweep(tables, block,
+                  *_segment_weights(tables, interval, temperature, fractions, length),
+                  n_segments, background)
 
 
 def _batch_cotangent(tables: RTETables, with_background: bool, temperature, fractions, length,
                      n_segments, radiance, cotangent):
-    index = _interval(tables, temperature)
-    weights, to_fields = jax.vjp(partial(_segment_weights, tables, index),
+    block, interval = _locate(tables, temperature, fractions)
+    weights, to_fields = jax.vjp(partial(_segment_weights, tables, interval),
                                  temperature, fractions, length)
-    d_weights, d_background = _sweep_vjp(tables, index, *weights, n_segments, radiance,
+    d_weights, d_background = _sweep_vjp(tables, block, *weights, n_segments, radiance,
                                          cotangent)
     return to_fields(d_weights), d_background if with_background else None
 
@@ -352,11 +367,11 @@ def _cotangents_xla(batch_rays, tables: RTETables, fields, lengths, radiance, co
 
 # -- the Numba sweeps (operators.rte_sweep_cpu) as XLA FFI calls -----------------------------
 def _numba_weights(tables: RTETables, fields):
-    """Each segment's temperature interval, and the map ``(fields, lengths) -> (amount,
+    """Each segment's block of table rows, and the map ``(fields, lengths) -> (amount,
     offset)`` to the weights the Numba sweeps take (differentiable by JAX)."""
-    index = _interval(tables, fields[0])
     species = 1 + np.asarray(tables.species, dtype=int)
-    return index, lambda f, s: _segment_weights(tables, index, f[0], f[species], s)[:2]
+    block, interval = _locate(tables, fields[0], fields[species])
+    return block, lambda f, s: _segment_weights(tables, interval, f[0], f[species], s)[:2]
 
 
 def _n_gas(tables: RTETables, amount) -> int:
@@ -364,12 +379,12 @@ def _n_gas(tables: RTETables, amount) -> int:
 
 
 def _spectra_shape(tables: RTETables, lengths):
-    return jax.ShapeDtypeStruct((lengths.shape[0], tables.n_eta), tables.dtype)
+    return jax.ShapeDtypeStruct((lengths.shape[0], tables.n_points), tables.dtype)
 
 
 def _background(tables: RTETables, background):
     """The background as the sweeps take it: one zero row for none."""
-    return jnp.zeros((1, tables.n_eta), tables.dtype) if background is None else background
+    return jnp.zeros((1, tables.n_points), tables.dtype) if background is None else background
 
 
 def _numba_sweep(kind, results, tables: RTETables, index, amount, offset, lengths, *operands):
@@ -402,7 +417,7 @@ def _cotangents_numba(tables: RTETables, fields, lengths, radiance, cotangent, h
     n_tau = amount.shape[-1]
     n_rays = lengths.shape[0] if has_background else 0
     shapes = (jax.ShapeDtypeStruct(amount.shape[:-1] + (n_tau + 1,), tables.dtype),
-              jax.ShapeDtypeStruct((n_rays, tables.n_eta), tables.dtype))
+              jax.ShapeDtypeStruct((n_rays, tables.n_points), tables.dtype))
     d_weights, transmittance = _numba_sweep("reverse", shapes, tables, index, amount, offset,
                                             lengths, radiance, cotangent)
     d_fields, d_lengths = to_inputs((d_weights[..., :n_tau], d_weights[..., n_tau]))
@@ -410,7 +425,23 @@ def _cotangents_numba(tables: RTETables, fields, lengths, radiance, cotangent, h
 
 
 _radiance.defvjp(_radiance_fwd, _radiance_bwd)
-_radiance_jit = jax.jit(_radiance, static_argnums=(0, 1))
+
+
+# -- spectral points and bins -----------------------------------------------------------------
+def _on_bins(radiance, tables: RTETables, fields, lengths, background=None):
+    """``radiance`` (a kernel on the tables' spectral points) per bin: the background given per
+    bin is taken at each of its points, the radiance averaged over each bin's points."""
+    if not tables.binned:
+        return radiance(tables, fields, lengths, background)
+    if background is not None:
+        background = background[..., tables.point_bin]
+    at_points = radiance(tables, fields, lengths, background) * tables.point_weight
+    return jnp.zeros(at_points.shape[:-1] + (tables.n_bins,), at_points.dtype
+                     ).at[..., tables.point_bin].add(at_points)
+
+
+_radiance_jit = jax.jit(lambda batch_rays, sweeps, *args: _on_bins(
+    partial(_radiance, batch_rays, sweeps), *args), static_argnums=(0, 1))
 
 
 #: The implementations of the sweeps (forward, forward-mode and reverse): JAX's, lowered by
@@ -468,7 +499,7 @@ def radiance_kernel(batch_rays: int, forward_mode: bool = False, sweeps: str | N
         W/(m²·sr·cm⁻¹).
     """
     kernel = _radiance_forward_mode if forward_mode else _radiance
-    return partial(kernel, int(batch_rays), choose_sweeps(sweeps))
+    return partial(_on_bins, partial(kernel, int(batch_rays), choose_sweeps(sweeps)))
 
 
 def emission_radiance(tables: RTETables, fields, lengths, batch_rays: int | None = None,
@@ -551,9 +582,9 @@ def emission_radiance_jvp(tables: RTETables, fields, lengths, d_fields, d_length
 @partial(jax.jit, static_argnums=(0, 1))
 def _radiance_jvp_jit(batch_rays, sweeps, tables, fields, lengths, d_fields, d_lengths,
                       background):
-    return jax.jvp(
-        lambda f, s: _radiance_forward_mode(batch_rays, sweeps, tables, f, s, background),
-        (fields, lengths), (d_fields, d_lengths))
+    kernel = partial(_on_bins, partial(_radiance_forward_mode, batch_rays, sweeps), tables)
+    return jax.jvp(lambda f, s: kernel(f, s, background), (fields, lengths),
+                   (d_fields, d_lengths))
 
 
 def _check_inputs(tables: RTETables, fields, lengths, background=None):

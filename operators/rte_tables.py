@@ -8,6 +8,22 @@ and written in the interval's normalized offset :math:`u \in [0, 1]`, so float32
 stays well inside its range; with ``planck="table"`` the cross-section splines are re-expanded
 on the refined temperature nodes of the Planck spline (:func:`operators.planck.planck_table`).
 
+**Composition** (optional). A species' lines are broadened and shifted differently by its own
+molecules than by air, so its cross-section depends on its own mole fraction :math:`X`. Given
+on increasing nodes of :math:`X` (``fraction_nodes``), it is interpolated linearly between the
+nodes either side, :math:`\sigma = (1 - w)\sigma_\mathrm{lo} + w\,\sigma_\mathrm{hi}`
+(:func:`operators.rte_blocks.fraction_weights`): two gas slots, of amounts
+:math:`X (1 - w) \Delta s / T` and :math:`X w \Delta s / T`. The table holds one block of rows
+per temperature interval and combination of the species' node intervals
+(:func:`operators.rte_blocks.composition_block`); the kernel gathers each segment's block, so
+its sweeps are those of fixed cross-sections with more gas slots.
+
+**Spectral points** (optional). A bin's mean transmission is not the exponential of its mean
+optical depth where lines narrower than the bin saturate. The tables may then hold several
+points per bin (``point_bin``), sub-bins with their own cross-sections: the kernel solves the
+transfer at every point and returns, per bin, the mean radiance of its points; a background
+given per bin is the same at each of its points.
+
 **Soot** (optional). Soot particles much smaller than the wavelength absorb in the Rayleigh
 limit, a continuum proportional to the soot volume fraction :math:`f_v` and the wavenumber,
 
@@ -33,6 +49,7 @@ import numpy as np
 
 from operators.base import precision
 from operators.planck import BOLTZMANN, planck_table
+from operators.rte_blocks import block_slots, check_fraction_nodes, check_point_bin
 
 SOOT_REFRACTIVE_INDEX = (3.16, 2.39)
 r"""Complex refractive index :math:`(n, k)` of soot near 675 cm⁻¹ (14.8 µm): the dispersion
@@ -65,8 +82,8 @@ def rayleigh_soot_constant(n: float = SOOT_REFRACTIVE_INDEX[0],
 
 
 @partial(jax.tree_util.register_dataclass,
-         data_fields=["nodes", "inv_width", "coef", "wavenumber"],
-         meta_fields=["species", "n_species", "planck", "soot"])
+         data_fields=["nodes", "inv_width", "coef", "wavenumber", "point_bin", "point_weight"],
+         meta_fields=["species", "n_species", "planck", "soot", "fraction_nodes", "n_bins"])
 @dataclasses.dataclass(frozen=True)
 class RTETables:
     r"""Spectral tables of the emission kernel, prepared from absorption splines.
@@ -81,17 +98,29 @@ class RTETables:
         ``planck == "table"``).
     inv_width : jax.Array, shape (m - 1,)
         Inverse interval widths in 1/K.
-    coef : jax.Array, shape (m - 1, n_coef, n_eta)
-        Per interval, the coefficients of :math:`u^3, u^2, u, 1` (``u`` the normalized offset
-        in the interval) of :math:`\sigma_s p 10^{-4}/k_B` (K/m) for each absorbing species
-        in ``species`` order, then (``soot``) the soot row :math:`C \eta \cdot 10^2` (m⁻¹ per
-        unit volume fraction, in the constant's place), then (``planck == "table"``) of
+    coef : jax.Array, shape ((m - 1) * n_blocks, n_coef, n_points)
+        Per temperature interval and composition block (index ``interval * n_blocks +
+        block``, :func:`operators.rte_blocks.n_composition_blocks`), the coefficients of
+        :math:`u^3, u^2, u, 1` (``u`` the normalized offset in the interval) of
+        :math:`\sigma_s p 10^{-4}/k_B` (K/m) for each gas slot (each absorbing species in
+        ``species`` order, two slots for one with several fraction nodes), then (``soot``) the
+        soot row :math:`C \eta \cdot 10^2` (m⁻¹ per unit volume fraction, in the constant's
+        place), then (``planck == "table"``) of
         :math:`B_\eta` in W/(m²·sr·cm⁻¹).
-    wavenumber : jax.Array, shape (n_eta,)
-        Wavenumbers in cm⁻¹.
+    wavenumber : jax.Array, shape (n_points,)
+        The spectral points' wavenumbers in cm⁻¹.
+    point_bin : jax.Array of int32, shape (n_points,)
+        The bin of each point (module notes, spectral points); ``arange(n_points)`` when every
+        bin is one point.
+    point_weight : jax.Array, shape (n_points,)
+        One over the number of points of each point's bin.
     species : tuple of int
         Indices (0-based, among the mole-fraction fields) of the species with a non-zero
         cross-section; the others are skipped.
+    fraction_nodes : tuple of tuple of float
+        Per species of :attr:`species`, the mole fractions at which its cross-section is
+        tabulated (module notes, composition): one node, a fixed cross-section; several, linear
+        interpolation in the species' own mole fraction.
     n_species : int
         Number of mole-fraction fields.
     planck : {"table", "exact"}
@@ -109,23 +138,29 @@ class RTETables:
     n_species: int
     planck: str
     soot: bool = False
+    fraction_nodes: tuple[tuple[float, ...], ...] = ()
+    point_bin: jax.Array | None = None
+    point_weight: jax.Array | None = None
+    n_bins: int = 0
 
     @classmethod
     def from_spline(cls, wavenumber, temperatures, coef, pressure: float = 101325.0,
                     dtype=np.float32, planck: str = "table",
-                    planck_rtol: float = 1e-7, soot: float | None = None) -> RTETables:
+                    planck_rtol: float = 1e-7, soot: float | None = None,
+                    fraction_nodes=None, point_bin=None) -> RTETables:
         r"""Prepare the kernel tables from cubic-spline coefficients of cross-sections.
 
         Parameters
         ----------
-        wavenumber : array_like, shape (n_eta,)
-            Wavenumbers in cm⁻¹.
+        wavenumber : array_like, shape (n_points,)
+            Wavenumbers of the spectral points in cm⁻¹.
         temperatures : array_like, shape (n_T,)
             Spline nodes in K, strictly increasing.
-        coef : array_like, shape (4, n_T - 1, n_species, n_eta)
+        coef : array_like, shape (4, n_T - 1, n_columns, n_points)
             :class:`~operators.tabulated.PiecewiseCubic` coefficients of the cross-sections
             :math:`\sigma_s(\eta, T)` in cm²/molecule: on interval ``i``,
-            :math:`\sigma = \sum_j c_{j,i} (T - T_i)^{3-j}`.
+            :math:`\sigma = \sum_j c_{j,i} (T - T_i)^{3-j}`. One column per mole-fraction
+            field, or, with ``fraction_nodes``, one per field and node, field-major.
         pressure : float, optional
             Total pressure in Pa (default 101325).
         dtype : numpy dtype, optional
@@ -139,6 +174,13 @@ class RTETables:
             The Rayleigh soot constant :math:`C` (dimensionless, e.g.
             :func:`rayleigh_soot_constant`): the kernel then takes a soot volume fraction
             field after the mole fractions. Default None: no soot.
+        fraction_nodes : sequence of sequence of float, optional
+            Per mole-fraction field, the increasing mole fractions (0 to 1) of its columns of
+            ``coef`` (module notes, composition). Default: one column per field, whatever its
+            mole fraction.
+        point_bin : array_like of int, shape (n_points,), optional
+            The bin of each point: non-decreasing, from 0, no bin skipped (module notes,
+            spectral points). Default: every point a bin of its own.
         """
         wavenumber = np.asarray(wavenumber, dtype=np.float64)
         temperatures = np.asarray(temperatures, dtype=np.float64)
@@ -149,10 +191,11 @@ class RTETables:
         if coef.ndim != 4 or coef.shape[0] != 4 or coef.shape[1] != n_t - 1 \
                 or coef.shape[3] != n_eta:
             raise ValueError(
-                f"coef must have shape (4, n_T - 1, n_species, n_eta) = (4, {n_t - 1}, "
-                f"n_species, {n_eta}) for {n_t} temperature nodes and {n_eta} wavenumbers; "
+                f"coef must have shape (4, n_T - 1, n_columns, n_eta) = (4, {n_t - 1}, "
+                f"n_columns, {n_eta}) for {n_t} temperature nodes and {n_eta} wavenumbers; "
                 f"got {coef.shape}"
             )
+        nodes_per_field = check_fraction_nodes(fraction_nodes, coef.shape[2])
         if not pressure > 0:
             raise ValueError(f"pressure must be positive (Pa), got {pressure}")
         if planck not in ("table", "exact"):
@@ -162,26 +205,38 @@ class RTETables:
         if soot is not None and not (np.isfinite(soot) and soot > 0):
             raise ValueError(f"soot must be the positive Rayleigh constant C (see "
                              f"rayleigh_soot_constant) or None, got {soot!r}")
-        species = tuple(int(s) for s in np.flatnonzero(np.any(coef != 0, axis=(0, 1, 3))))
+        first = np.cumsum([0, *map(len, nodes_per_field)])
+        columns = [np.arange(first[f], first[f + 1]) for f in range(len(nodes_per_field))]
+        species = tuple(f for f, c in enumerate(columns) if np.any(coef[:, :, c] != 0))
+        fraction_nodes = tuple(nodes_per_field[f] for f in species)
         if planck == "table":
             nodes, b_coef = planck_table(wavenumber, temperatures, rtol=planck_rtol)
         else:
             nodes = temperatures
-        sigma = _restrict(temperatures, coef[:, :, list(species)], nodes)
         scale = pressure * 1e-4 / BOLTZMANN
-        # (4, m - 1, k, n_eta) blocks -> (m - 1, k * 4, n_eta), species-major
-        gas = (sigma * scale * _powers_of_width(nodes, sigma.ndim)).transpose(1, 2, 0, 3)
-        parts = [gas.reshape(nodes.size - 1, -1, n_eta)]
+        sigma = _restrict(temperatures, coef, nodes) * scale * _powers_of_width(nodes, 4)
+        blocks = block_slots([columns[f] for f in species])
+        n_gas = 4 * sum(map(len, blocks[0]))
+        n_rows = n_gas + (soot is not None) + 4 * (planck == "table")
+        table = np.empty((nodes.size - 1, len(blocks), n_rows, n_eta), dtype)
+        for b, slots in enumerate(blocks):  # (4, m - 1, k, n_eta) -> (m - 1, k * 4, n_eta)
+            chosen = sigma[:, :, np.concatenate(slots)] if slots else sigma[:, :, :0]
+            table[:, b, :n_gas] = chosen.transpose(1, 2, 0, 3).reshape(nodes.size - 1, -1, n_eta)
         if soot is not None:
-            parts.append(np.broadcast_to(soot * 1e2 * wavenumber, (nodes.size - 1, 1, n_eta)))
-            species += (int(coef.shape[2]),)
+            table[:, :, n_gas] = soot * 1e2 * wavenumber
+            species += (len(nodes_per_field),)
         if planck == "table":
-            parts.append((b_coef * _powers_of_width(nodes, b_coef.ndim)).transpose(1, 0, 2))
-        table = np.concatenate(parts, axis=1)
+            b_rows = (b_coef * _powers_of_width(nodes, b_coef.ndim)).transpose(1, 0, 2)
+            table[:, :, -4:] = b_rows[:, None]
+        table = table.reshape(-1, n_rows, n_eta)
+        point_bin = check_point_bin(point_bin, n_eta)
+        weight = 1.0 / np.bincount(point_bin)[point_bin]
         with precision(dtype):  # float64 arrays stay float64 outside JAX's 64-bit mode
             return cls(jnp.asarray(nodes, dtype), jnp.asarray(1.0 / np.diff(nodes), dtype),
                        jnp.asarray(table, dtype), jnp.asarray(wavenumber, dtype),
-                       species, int(coef.shape[2]), planck, soot is not None)
+                       species, len(nodes_per_field), planck, soot is not None, fraction_nodes,
+                       jnp.asarray(point_bin, jnp.int32), jnp.asarray(weight, dtype),
+                       int(point_bin[-1]) + 1)
 
     @property
     def dtype(self):
@@ -196,8 +251,18 @@ class RTETables:
 
     @property
     def n_eta(self) -> int:
-        """Number of wavenumbers."""
+        """Number of spectral bins: of the radiance the kernel returns, and of a background."""
+        return self.n_bins
+
+    @property
+    def n_points(self) -> int:
+        """Number of spectral points, at which the kernel solves the transfer."""
         return self.wavenumber.shape[0]
+
+    @property
+    def binned(self) -> bool:
+        """Whether some bin has several points (the kernel then averages over them)."""
+        return self.n_points != self.n_bins
 
     @cached_property
     def temperature_range(self) -> tuple[float, float]:
@@ -252,4 +317,3 @@ def _powers_of_width(nodes, ndim):
     """``width**(3 - j)`` shaped to scale coefficients ``(4, m - 1, ...)`` to offsets in [0, 1]."""
     width = np.diff(nodes)
     return (width[None, :] ** np.arange(3, -1, -1)[:, None]).reshape((4, -1) + (1,) * (ndim - 2))
-

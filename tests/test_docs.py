@@ -57,7 +57,8 @@ def test_api_reference_documents_every_public_name(site, package):
 def test_configuration_page_lists_every_key():
     """Every key of the schema, and no other, has a row in the configuration guide."""
     text = (DOCS / "guide" / "configuration.md").read_text()
-    documented = set(re.findall(r"^\| `([a-z_]+(?:\.[a-z_]+)?)` \|", text, flags=re.MULTILINE))
+    row = r"^\| `([a-z0-9_]+(?:\.[a-z0-9_]+)?)` \|"
+    documented = set(re.findall(row, text, flags=re.MULTILINE))
     keys = {f"{section}.{key}" if isinstance(values, dict) else section
             for section, values in DEFAULTS.items()
             for key in (values if isinstance(values, dict) else [None])}

@@ -40,11 +40,11 @@ def add_parser(subparsers) -> None:
     )
     plot.add_argument(
         "--x-co2", type=arguments.fraction, default=0.1,
-        help="CO2 mole fraction of the slab (default 0.1)",
+        help="CO2 mole fraction of the slab and of the gas of the cross-sections (default 0.1)",
     )
     plot.add_argument(
         "--x-h2o", type=arguments.fraction, default=0.2,
-        help="H2O mole fraction of the slab (default 0.2)",
+        help="H2O mole fraction of the slab and of the gas of the cross-sections (default 0.2)",
     )
     plot.add_argument(
         "--resolution", type=arguments.positive, default=8.0,
@@ -94,10 +94,13 @@ def run(args: argparse.Namespace) -> int:
             raise ConfigError(f"{name} {value:g} K lies outside the absorption table's "
                               f"{lo:g}-{hi:g} K")
     eta = table.wavenumber
+    fractions = np.zeros(len(table.species))
+    fractions[table.species.index("CO2")] = args.x_co2
+    fractions[table.species.index("H2O")] = args.x_h2o
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(10, 8), sharex=True)
     colors = plt.get_cmap("plasma")(np.linspace(0.0, 0.8, len(args.temperatures)))
     for temperature, color in zip(args.temperatures, colors, strict=True):
-        sigma = table.cross_sections(np.asarray(temperature))
+        sigma = table.cross_sections(np.asarray(temperature), fractions)
         for name, style in (("CO2", "-"), ("H2O", ":")):
             top.semilogy(
                 eta, sigma[table.species.index(name)], style, color=color, lw=0.6,
@@ -106,11 +109,9 @@ def run(args: argparse.Namespace) -> int:
     top.set_ylabel("σ [cm²/molecule]")
     top.set_ylim(bottom=1e-24)
     top.legend(ncol=len(args.temperatures), fontsize=8)
-    top.set_title("Absorption cross-sections at 1 atm (bin averages over 0.04 cm⁻¹)")
+    top.set_title("Absorption cross-sections at 1 atm (bin averages over 0.04 cm⁻¹), in a gas "
+                  f"of {100 * args.x_co2:g} % CO2 and {100 * args.x_h2o:g} % H2O")
 
-    fractions = np.zeros(len(table.species))
-    fractions[table.species.index("CO2")] = args.x_co2
-    fractions[table.species.index("H2O")] = args.x_h2o
     radiance = slab_radiance(table, args.slab_temperature, fractions, args.length)
     ils = ILSConvolution(eta, n_rays=1, resolution=args.resolution)
     measured = ils.matvec(radiance[None, :].ravel()).reshape(ils.dimsd)[0]

@@ -26,6 +26,7 @@ from invflame.experiments.config_keys import (
     LOW_HIGH,
     NUMBER,
     NUMBER_OR_STRING,
+    POWER_OF_TWO,
     SQUARE,
     STRING,
     TABLE,
@@ -89,6 +90,17 @@ SCHEMA: dict[str, Key | Section] = {
         "step": _positive(NUMBER, 0.04, "step of the line-by-line grid, at most half of "
                           "instrument.resolution", "cm⁻¹"),
         "pressure": _positive(NUMBER, 101325.0, "total pressure of the gas", "Pa"),
+        "broadening": Key(STRING, "local", "'local': each voxel's lines broadened and shifted "
+                          "by its own H2O and CO2 fractions (the cross-sections tabulated on "
+                          "self-fraction nodes); 'fixed': at X_CO2 = 0.1 and X_H2O = 0.2 "
+                          "whatever the gas holds", choices=("local", "fixed")),
+        "co2_lines": Key(STRING, "", "a HITRAN or HITEMP .par file of CO2 lines (160-character "
+                         "records) to use instead of the generated CO2 list"),
+        "h2o_lines": Key(STRING, "", "a HITRAN or HITEMP .par file of H2O lines to use instead "
+                         "of the packaged HITRAN2012 lines"),
+        "points_per_bin": _positive(INTEGER, 8, "most spectral points per line-by-line bin "
+                                    "(sub-bins where lines saturate inside a bin); 1: one "
+                                    "optical depth per bin", rule=POWER_OF_TWO),
     }),
     "instrument": Section("the FTIR spectrometer", {
         "resolution": _positive(NUMBER, 8.0, "resolution 1/L (L the maximum optical path "

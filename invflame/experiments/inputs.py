@@ -12,10 +12,12 @@ from invflame.measurement_file import MeasurementFile, read_measurement
 from invflame.phantoms import make_phantom
 from invflame.phantoms.plume import plume_soot
 from invflame.spectroscopy.absorption_table import AbsorptionTable, default_linelists
+from invflame.spectroscopy.table_inputs import BROADENING
 
 
 def absorption_table(cfg: dict, step: float | None = None) -> AbsorptionTable:
-    """The absorption table for the configuration's spectral window (cached on disk).
+    """The absorption table for the configuration's spectral window, line lists, self
+    broadening and spectral points (cached on disk).
 
     Parameters
     ----------
@@ -24,9 +26,13 @@ def absorption_table(cfg: dict, step: float | None = None) -> AbsorptionTable:
     step : float, optional
         Line-by-line step in cm⁻¹ (default ``spectrum.step``).
     """
-    wavenumber = configuration.line_by_line_grid(cfg["spectrum"], step)
-    return AbsorptionTable.cached(default_linelists(wavenumber), wavenumber=wavenumber,
-                                  pressure=cfg["spectrum"]["pressure"])
+    spectrum = cfg["spectrum"]
+    wavenumber = configuration.line_by_line_grid(spectrum, step)
+    files = {"CO2": spectrum["co2_lines"], "H2O": spectrum["h2o_lines"]}
+    return AbsorptionTable.cached(default_linelists(wavenumber, files), wavenumber=wavenumber,
+                                  pressure=spectrum["pressure"],
+                                  self_fraction=BROADENING[spectrum["broadening"]],
+                                  subdivision=spectrum["points_per_bin"])
 
 
 def read_data(cfg: dict) -> MeasurementFile | None:

@@ -10,7 +10,8 @@ from invflame.experiments.metrics import field_scores, psnr
 
 
 def protocol(cfg: dict, measurement: Measurement) -> dict[str, str]:
-    """What made a result, in words: the start, the data, the noise and the weight λ."""
+    """What made a result, in words: the start, the data, the noise, the weight λ, the
+    unknowns and the forward model."""
     init, data, reg = cfg["init"], cfg["data"], cfg["regularizer"]
     calibrated = ("; amplitude and heat per product fitted to the spectra" if init["calibrate"]
                   else "")
@@ -46,7 +47,20 @@ def protocol(cfg: dict, measurement: Measurement) -> dict[str, str]:
                   "fields": "per point T and the mole fractions"}
     return {"start": starts[init["kind"]], "data": made, "noise": said,
             "lambda": f"{reg['lambda']} ({reg['scaling']} scaling)",
-            "unknowns": parameters[cfg["representation"]["parameters"]]}
+            "unknowns": parameters[cfg["representation"]["parameters"]],
+            "model": forward_model(cfg["spectrum"])}
+
+
+def forward_model(spectrum: dict) -> str:
+    """The forward model's spectroscopy in words: broadening and spectral points."""
+    broadening = {"local": "lines broadened and shifted by each point's own H2O and CO2 "
+                           "fractions",
+                  "fixed": "lines broadened at fixed X_CO2 = 0.1 and X_H2O = 0.2"}
+    points = spectrum["points_per_bin"]
+    inside = (f"up to {points} spectral points per {spectrum['step']:g} cm-1 bin where lines "
+              "saturate inside it" if points > 1 else
+              f"one optical depth per {spectrum['step']:g} cm-1 bin")
+    return f"{broadening[spectrum['broadening']]}; {inside}"
 
 
 def chi2_per_value(simulated: np.ndarray, measurement: Measurement) -> float:

@@ -5,7 +5,9 @@
 * :mod:`.partition`, :mod:`.isotopologues` — TIPS partition sums, isotopologue masses
 * :mod:`.line_parameters` — S(T), Lorentz and Doppler widths, pressure shift
 * :mod:`.cross_section` — bin-averaged Voigt cross-sections on a uniform grid
-* :mod:`.absorption_table` — :class:`AbsorptionTable` σ(η, T), κ, Planck-mean κ
+* :mod:`.absorption_table` — :class:`AbsorptionTable` σ(η, T, X_self), κ, Planck-mean κ
+* :mod:`.spectral_points` — sub-bins where lines saturate inside a bin
+* :mod:`.table_inputs`, :mod:`.table_files` — what a table is built from, its cached file
 * :mod:`.planck` — Planck's law per wavenumber
 """
 

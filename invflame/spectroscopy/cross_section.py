@@ -1,8 +1,9 @@
 r"""Line-by-line absorption cross-sections on a uniform wavenumber grid.
 
 :math:`\sigma(\eta) = \sum_i S_i(T)\, f_i(\eta - \nu_i^*)` in cm²/molecule, with
-:math:`\nu_i^* = \nu_i + \delta_\mathrm{air} p` and :math:`f_i` a Voigt profile of Doppler
-HWHM :math:`\gamma_D` and Lorentz HWHM :math:`\gamma_L`
+:math:`\nu_i^* = \nu_i + \delta_\mathrm{air} (p - p_\mathrm{self})` (no self shift in the
+record, :func:`~invflame.spectroscopy.line_parameters.pressure_shift`) and :math:`f_i` a Voigt
+profile of Doppler HWHM :math:`\gamma_D` and Lorentz HWHM :math:`\gamma_L`
 (:mod:`invflame.spectroscopy.line_parameters`).
 
 **Bin averages.** Grid point :math:`\eta_k` stands for the bin
@@ -158,12 +159,12 @@ def cross_section(
         raise ValueError(f"pressure must be positive (Pa), got {pressure}")
     if not wing > CORE_HALF_WIDTH:
         raise ValueError(f"wing cutoff must exceed the core half width {CORE_HALF_WIDTH} cm-1")
-    centre = lines.nu + pressure_shift(lines, pressure)
+    centre = lines.nu + pressure_shift(lines, pressure, self_fraction * pressure)
     reach = wing + step / 2
     lines = lines.select((centre >= wavenumber[0] - reach) & (centre <= wavenumber[-1] + reach))
     if len(lines) == 0:
         return np.zeros(wavenumber.size)
-    centre = lines.nu + pressure_shift(lines, pressure)
+    centre = lines.nu + pressure_shift(lines, pressure, self_fraction * pressure)
     position = (centre - wavenumber[0]) / step
     intensity = line_intensity(lines, temperature)
     gamma = lorentz_hwhm(lines, temperature, pressure, self_fraction * pressure)

@@ -87,18 +87,30 @@ def lorentz_hwhm(
     return scale * (lines.gamma_air * p_air + lines.gamma_self * p_self)
 
 
-def pressure_shift(lines: LineList, pressure: float) -> np.ndarray:
-    """Pressure shift of the line positions, ``delta_air * p`` in cm⁻¹ (p in atm).
+def pressure_shift(lines: LineList, pressure: float, self_pressure: float = 0.0) -> np.ndarray:
+    r"""Pressure shift of the line positions in cm⁻¹.
 
-    Self shifts are not in the HITRAN record; the air shift is applied at the total pressure.
+    .. math:: \Delta\nu = \delta_\mathrm{air}\,(p - p_\mathrm{self}) +
+              \delta_\mathrm{self}\, p_\mathrm{self}, \quad p \text{ in atm}
+
+    each perturber's shift weighted by its partial pressure, as the widths are (HITRAN's
+    convention for a mixture, as HAPI applies it: Kochanov et al. 2016, JQSRT 177, 15–30). The
+    160-character HITRAN record holds no self shift, so :math:`\delta_\mathrm{self} = 0`: in
+    a gas of self fraction x the air shift acts with the weight 1 − x.
 
     Parameters
     ----------
     lines : LineList
     pressure : float
         Total pressure in Pa.
+    self_pressure : float
+        Partial pressure of the absorbing gas in Pa, ``0 <= self_pressure <= pressure``.
     """
-    return lines.delta_air * (pressure / ATM)
+    if not 0.0 <= self_pressure <= pressure:
+        raise ValueError(
+            f"need 0 <= self_pressure <= pressure (Pa), got {self_pressure} and {pressure}"
+        )
+    return lines.delta_air * ((pressure - self_pressure) / ATM)
 
 
 def doppler_hwhm(lines: LineList, temperature: float) -> np.ndarray:

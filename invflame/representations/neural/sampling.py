@@ -26,6 +26,8 @@ from __future__ import annotations
 import numpy as np
 import torch
 
+from invflame.spectroscopy.table_inputs import FIXED_SELF_FRACTION
+
 
 def stratified(t_near: torch.Tensor, t_far: torch.Tensor, offsets: torch.Tensor) -> torch.Tensor:
     """Stratified distances (m), shape ``(n_rays, n)``, for ``offsets`` ``(n_rays, n)`` in
@@ -87,10 +89,13 @@ def importance(bounds: torch.Tensor, weights: torch.Tensor, u: torch.Tensor,
 class PlanckMeanOpacity:
     r"""Planck-mean absorption coefficient :math:`\bar\kappa(T, X)` in m⁻¹, tabulated in T.
 
-    :math:`\bar\kappa = \sum_s X_s\, k_s(T)` is linear in the mole fractions, so the
+    :math:`\bar\kappa = \sum_s X_s\, k_s(T)`, linear in the mole fractions: the
     per-species coefficients :math:`k_s(T)` (m⁻¹ per unit mole fraction, from
-    :meth:`AbsorptionTable.planck_mean_kappa`) are tabulated on a temperature grid and
-    interpolated linearly.
+    :meth:`AbsorptionTable.planck_mean_kappa`) are tabulated on a temperature grid, with each
+    species' lines broadened at the fixed fractions of
+    :data:`~invflame.spectroscopy.table_inputs.FIXED_SELF_FRACTION` (the forward model
+    broadens them by each point's own gas; for drawing samples along rays the fixed ones do),
+    and interpolated linearly in T.
 
     Parameters
     ----------
@@ -114,9 +119,11 @@ class PlanckMeanOpacity:
         temperatures = np.linspace(table.temperatures[0], table.temperatures[-1],
                                    int(n_temperatures))
         n_species = len(table.species)
+        fractions = [FIXED_SELF_FRACTION.get(name) or 1.0 for name in table.species]
         per_species = [
             table.planck_mean_kappa(temperatures, np.broadcast_to(
-                np.eye(n_species)[s][:, None], (n_species, temperatures.size)))
+                (fractions[s] * np.eye(n_species)[s])[:, None], (n_species, temperatures.size))
+            ) / fractions[s]
             for s in range(n_species)
         ]
         return cls(temperatures, np.stack(per_species))

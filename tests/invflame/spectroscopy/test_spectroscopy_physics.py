@@ -72,6 +72,8 @@ def test_widths_and_shift():
     expected = (296.0 / t) ** 0.7 * (0.07 * 0.9 + 0.09 * 0.1)
     np.testing.assert_allclose(lorentz_hwhm(line, t, ATM, p_self), [expected], rtol=1e-12)
     np.testing.assert_allclose(pressure_shift(line, 2 * ATM), [-0.004], rtol=1e-12)
+    # no self shift in the record: the air shift weighted by the air's partial pressure
+    np.testing.assert_allclose(pressure_shift(line, 2 * ATM, 0.5 * ATM), [-0.003], rtol=1e-12)
     # CO2 at 296 K, 690 cm-1: nu/c sqrt(2 ln2 kT/m) with m = 43.98983 u
     mass = 43.98983 * constants.atomic_mass
     expected_d = 690.0 * np.sqrt(2 * np.log(2) * constants.k * 296.0 / mass) / constants.c

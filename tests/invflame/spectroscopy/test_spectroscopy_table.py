@@ -4,9 +4,10 @@ import numpy as np
 import pytest
 from scipy import constants
 
+from invflame.errors import InputDataError
 from invflame.spectroscopy.absorption_table import AbsorptionTable, default_linelists
 from invflame.spectroscopy.cross_section import cross_section
-from invflame.spectroscopy.linelist import read_par
+from invflame.spectroscopy.linelist import LineList, read_par, write_par
 from invflame.spectroscopy.table_accuracy import spline_error
 from operators.planck import planck
 
@@ -16,13 +17,10 @@ NODES = [300.0, 600.0, 1000.0, 1500.0]
 
 
 @pytest.fixture(scope="module")
-def h2o(shared_linedata):
-    return read_par(shared_linedata / "H2O_HITRAN2012_600-800.par", nu_range=(664.0, 726.0))
-
-
-@pytest.fixture(scope="module")
 def small(h2o):
-    return AbsorptionTable.build({"H2O": h2o}, wavenumber=GRID, temperatures=NODES)
+    """Fixed self-broadening fractions, one point per bin: one column per species."""
+    return AbsorptionTable.build({"H2O": h2o}, wavenumber=GRID, temperatures=NODES,
+                                 self_fraction={"CO2": 0.1, "H2O": 0.2}, subdivision=1)
 
 
 @pytest.fixture(scope="module")
@@ -41,10 +39,13 @@ def test_build_layout_nodes_and_zero_species(small, h2o):
     )
     # the spline passes through the nodes and has the documented shape
     np.testing.assert_allclose(small.spline(np.array(NODES)), small.sigma, rtol=1e-9, atol=0)
-    assert small.cross_sections(np.full((2, 5), 700.0)).shape == (2, 5, 3, GRID.size)
-    arrays = small.as_arrays()
-    assert arrays["spline_coef"].shape == (4, 3, 3, GRID.size)
-    assert all(type(v) in (np.ndarray, float) for v in arrays.values())
+    assert small.cross_sections(np.full((2, 5), 700.0), np.zeros((3, 2, 5))).shape == \
+        (2, 5, 3, GRID.size)
+    assert small.spline.coef.shape == (4, 3, 3, GRID.size)
+    assert small.self_fraction == ((0.1,), (0.2,), (0.0,))
+    tables = small.kernel_tables()
+    assert tables.fraction_nodes == ((0.2,),) and tables.species == (1,)  # H2O alone absorbs
+    assert tables.n_points == tables.n_eta == GRID.size
     with pytest.raises(ValueError, match="not in species"):
         AbsorptionTable.build({"N2O": h2o}, wavenumber=GRID, temperatures=NODES)
 
@@ -98,9 +99,12 @@ def test_default_table(default_table, monkeypatch):
     assert table.species == ("CO2", "H2O", "CH4")
     assert table.wavenumber.size == 1876 and table.pressure == ATM
     assert table.temperatures[0] == 250.0 and table.temperatures[-1] == 2500.0
-    assert np.all(table.sigma[:, :2] > 0) and not table.sigma[:, 2].any()
+    assert table.self_fraction[2] == (0.0,) and not table.sigma[:, table.columns(2)].any()
+    assert np.all(table.sigma[:, :table.columns(2).start] > 0)  # CO2 and H2O, every node
+    assert 1.3 < table.points_per_bin.mean() < 2.0  # spectral points where lines saturate
     # CO2 ν2 Q branch at 667.4 cm-1 dominates the window at 300 K
-    peak = table.wavenumber[np.argmax(table.cross_sections(np.array(300.0))[0])]
+    air = np.array([0.0004, 0.01, 0.0])
+    peak = table.wavenumber[np.argmax(table.cross_sections(np.array(300.0), air)[0])]
     assert abs(peak - 667.4) < 0.5
     # hot gas: Planck-mean κ of 10 % CO2 + 20 % H2O at 1500 K is of order 1 m-1
     mean = table.planck_mean_kappa(np.array(1500.0), np.array([0.1, 0.2, 0.0]))
@@ -119,3 +123,20 @@ def test_default_spline_error_below_half_percent(default_table):
     assert errors[:, :2].min() > 0
     assert errors.max() <= 0.005, errors
 
+
+
+def test_a_users_line_files_replace_the_built_in_lists(h2o, shared_linedata, tmp_path):
+    """A HITRAN CO2 file stands in for the generated list, its other molecules left out; a file
+    without the species near the grid is refused, naming it."""
+    mixed = tmp_path / "mixed.par"
+    co2 = read_par(shared_linedata / "CO2_HITRAN_691.4-692.7_validation.par")
+    write_par(LineList.concatenate([co2, h2o.window(691.0, 693.0)]), mixed)
+    grid = 690.0 + 0.04 * np.arange(101)
+    lines = default_linelists(grid, {"CO2": mixed, "H2O": ""})
+    assert len(lines["CO2"]) == len(co2) and set(lines["CO2"].molecule) == {2}
+    np.testing.assert_array_equal(lines["H2O"].nu, default_linelists(grid)["H2O"].nu)
+    with pytest.raises(InputDataError, match="holds no H2O line"):
+        default_linelists(650.0 + 0.04 * np.arange(101), {"H2O": shared_linedata
+                                                        / "CO2_HITRAN_691.4-692.7_validation.par"})
+    with pytest.raises(ValueError, match="only CO2 and H2O"):
+        default_linelists(grid, {"N2O": mixed})

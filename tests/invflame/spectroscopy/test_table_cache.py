@@ -8,17 +8,11 @@ import pytest
 from invflame.atomic_files import CorruptFileError
 from invflame.errors import InputDataError
 from invflame.spectroscopy.absorption_table import AbsorptionTable
-from invflame.spectroscopy.linelist import read_par
 
 GRID = 690.0 + 0.1 * np.arange(51)  # 690-695 cm-1
 OTHER_GRID = 700.0 + 0.1 * np.arange(51)
 NODES = [300.0, 1000.0, 1500.0]
 LOGGER = "invflame.spectroscopy.absorption_table"
-
-
-@pytest.fixture(scope="module")
-def h2o(shared_linedata):
-    return read_par(shared_linedata / "H2O_HITRAN2012_600-800.par", nu_range=(664.0, 726.0))
 
 
 @pytest.fixture
