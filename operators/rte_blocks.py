@@ -77,6 +77,30 @@ def fraction_weights(nodes, fraction, xp=np):
     return lower, weight
 
 
+def interpolate_fraction(values, nodes, fraction) -> np.ndarray:
+    """Values given at a species' fraction nodes, interpolated linearly at its mole fractions
+    (NumPy; the kernel does the same through its gas slots).
+
+    Parameters
+    ----------
+    values : ndarray, shape (..., len(nodes), n)
+        One row per node.
+    nodes : sequence of float
+        Increasing mole fractions; with one node, its row whatever the fraction.
+    fraction : array_like, shape (...)
+        Mole fractions (dimensionless), broadcast against the leading axes of ``values``.
+
+    Returns
+    -------
+    ndarray, shape (..., n)
+    """
+    if len(nodes) == 1:
+        return values[..., 0, :]
+    lower, weight = fraction_weights(nodes, np.asarray(fraction, dtype=np.float64))
+    pick = np.take_along_axis(values, np.stack([lower, lower + 1], -1)[..., None], -2)
+    return pick[..., 0, :] + weight[..., None] * (pick[..., 1, :] - pick[..., 0, :])
+
+
 def composition_block(fraction_nodes, lowers, xp=np):
     """The composition block of segments: the species' node intervals numbered together.
 

@@ -40,7 +40,7 @@ from invflame.spectroscopy.table_inputs import (
 )
 from operators.disk_cache import cache_dir
 from operators.planck import planck
-from operators.rte_blocks import fraction_weights
+from operators.rte_blocks import interpolate_fraction
 from operators.rte_tables import RTETables
 from operators.tabulated import PiecewiseCubic
 
@@ -296,10 +296,9 @@ class AbsorptionTable:
 
         Raises
         ------
-        CorruptFileError
-            If the file is empty, truncated or not an ``.npz`` archive.
-        InputDataError
-            If it lacks entries, its arrays fail the stored hash, or it holds another key.
+        CorruptFileError, InputDataError
+            As :func:`~.table_files.read_table`: a damaged file, missing entries, a failed
+            hash or another key.
         """
         data = read_table(path, key)
         return cls(
@@ -371,13 +370,7 @@ class AbsorptionTable:
         sigma = np.empty(temperature.shape + (len(self.species), self.wavenumber.size))
         for j, nodes in enumerate(self.self_fraction):
             own = self.bin_average(columns[..., self.columns(j), :])
-            if len(nodes) == 1:
-                sigma[..., j, :] = own[..., 0, :]
-                continue
-            lower, weight = fraction_weights(nodes, mole_fractions[j])
-            pick = np.take_along_axis(own, np.stack([lower, lower + 1], -1)[..., None], -2)
-            sigma[..., j, :] = pick[..., 0, :] + weight[..., None] * (pick[..., 1, :]
-                                                                      - pick[..., 0, :])
+            sigma[..., j, :] = interpolate_fraction(own, nodes, mole_fractions[j])
         return sigma
 
     def kappa(self, temperature, mole_fractions, pressure: float | None = None) -> np.ndarray:

@@ -26,7 +26,7 @@ import numpy as np
 from scipy import constants
 
 from operators.planck import planck
-from operators.rte_blocks import fraction_weights
+from operators.rte_blocks import interpolate_fraction
 
 #: Most sub-bins per bin (a power of two): 0.005 cm⁻¹ at the default 0.04 cm⁻¹ bins.
 MAX_POINTS_PER_BIN = 8
@@ -126,10 +126,8 @@ def plan_points(wavenumber, temperatures, fine_sigma, species, fraction_nodes,
             own = fine_sigma[node, first[s]:first[s + 1]]
             if x == 0.0 or not own.any():
                 continue
-            if own.shape[0] > 1:
-                lower, weight = fraction_weights(fraction_nodes[s], np.asarray(x))
-                own = own[lower] + weight * (own[lower + 1] - own[lower])
-            tau += x * density * np.reshape(own, -1) * reference["length"]
+            own = interpolate_fraction(own, fraction_nodes[s], x)
+            tau += x * density * own * reference["length"]
         tau = tau.reshape(n_bins, subdivision)
         transmission = np.stack([np.exp(-tau.reshape(n_bins, m, -1).mean(-1)).mean(-1)
                                  for m in levels], axis=-1)  # (n_bins, levels)
