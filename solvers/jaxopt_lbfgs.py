@@ -6,11 +6,12 @@ its algorithm and line search (zoom, strong Wolfe) jit-compiled around a host ca
 logging, stopping rules and checkpoints are ours; the full jaxopt state (L-BFGS memory
 included) is saved, so a resumed run reproduces an uninterrupted one.
 
-jaxopt runs in the problem's dtype. For a float64 problem JAX's 64-bit mode is on for the
-whole process while jaxopt runs (:func:`_float64_everywhere`), and off again after, when it was
-off: the host callback runs on XLA's threads, which the calling thread's mode
-(:func:`operators.precision`) does not reach, and there JAX would round its float64 results to
-float32 or refuse them.
+jaxopt runs in the problem's dtype: for a float64 problem inside :func:`operators.precision`,
+JAX's 64-bit mode for the calling thread only, so the process's setting never changes. The host
+callback may run on one of XLA's threads, which that mode does not reach and where JAX would
+round float64 values to float32; the parameters, the value and the gradient therefore cross the
+callback as their bits, in uint32 words (:func:`_to_words`, :func:`_from_words`), which no mode
+changes.
 
 The first iteration of a run compiles jaxopt's update (seconds); a solver instance keeps the
 compiled update for the last problem it solved, so a resume or a second run on that problem
@@ -20,14 +21,13 @@ only its stable L-BFGS(-B) classes.
 
 from __future__ import annotations
 
-import contextlib
-import threading
 from dataclasses import dataclass
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from operators import precision
 from solvers.base import Solver, Step
 from solvers.evaluation_cache import EvaluationCache
 from solvers.options import SolverOptions, option
@@ -56,28 +56,22 @@ class JaxoptLBFGSOptions(SolverOptions):
     maxls: int = option(30, ">= 1", lambda v: v >= 1)
 
 
-def _process_x64() -> bool:
-    """Whether JAX's 64-bit mode is on for the process, whatever the calling thread's own
-    setting (a new thread sees the process's)."""
-    seen = []
-    thread = threading.Thread(target=lambda: seen.append(bool(jax.config.jax_enable_x64)))
-    thread.start()
-    thread.join()
-    return seen[0]
+def _word_shape(dims, dtype) -> tuple[int, ...]:
+    """Shape of an array of shape ``dims`` and float ``dtype`` (float32 or float64) as uint32
+    words, as :func:`jax.lax.bitcast_convert_type` gives it (a last axis of 2 for float64)."""
+    words = np.dtype(dtype).itemsize // 4
+    return (*dims, words) if words > 1 else tuple(dims)
 
 
-@contextlib.contextmanager
-def _float64_everywhere(dtype):
-    """JAX's 64-bit mode for the whole process inside, for a float64 ``dtype`` (module notes);
-    the process's setting is restored on leaving."""
-    if np.dtype(dtype) != np.float64 or _process_x64():
-        yield
-        return
-    jax.config.update("jax_enable_x64", True)
-    try:
-        yield
-    finally:
-        jax.config.update("jax_enable_x64", False)
+def _to_words(value, dtype, dims) -> np.ndarray:
+    """The bits of ``value`` (shape ``dims``, cast to ``dtype``) as uint32 words."""
+    flat = np.ascontiguousarray(value, dtype).reshape(-1)
+    return flat.view(np.uint32).reshape(_word_shape(dims, dtype))
+
+
+def _from_words(words, dtype, dims) -> np.ndarray:
+    """The array of ``dtype`` and shape ``dims`` whose bits are the uint32 ``words``."""
+    return np.ascontiguousarray(words, np.uint32).reshape(-1).view(dtype).reshape(dims)
 
 
 @register("jaxopt-lbfgs")
@@ -97,7 +91,7 @@ class JaxoptLBFGS(Solver):
         """
         cached = getattr(self, "_compiled", None)
         if cached is None or cached[0] is not run.problem:
-            with _float64_everywhere(run.problem.dtype):  # jaxopt makes constants as it is built
+            with precision(run.problem.dtype):  # jaxopt makes constants as it is built
                 cached = (run.problem, *self._build(run.problem))
             self._compiled = cached
         _, solver, extra, active = cached
@@ -111,20 +105,24 @@ class JaxoptLBFGS(Solver):
         import jaxopt
 
         active = {}
-        out_shapes = (jax.ShapeDtypeStruct((), problem.dtype),
-                      jax.ShapeDtypeStruct(problem.dims, problem.dtype))
+        dtype, dims = problem.dtype, problem.dims
+        out_shapes = (jax.ShapeDtypeStruct(_word_shape((), dtype), np.uint32),
+                      jax.ShapeDtypeStruct(_word_shape(dims, dtype), np.uint32))
 
-        def host(x):
+        def host(words):
             run = active["run"]
             # jaxopt's trial points may lie a rounding error outside the box, where a forward
             # model may refuse them (e.g. a mole fraction of -1e-14)
-            x = problem.project(np.asarray(x, dtype=problem.dtype))
+            x = problem.project(_from_words(words, dtype, dims))
             cache = run.scratch["cache"]
             ev = cache.get(x) or cache.put(x, run.evaluate(x))
-            return np.asarray(ev.loss, problem.dtype), np.asarray(ev.grad, problem.dtype)
+            return _to_words(ev.loss, dtype, ()), _to_words(ev.grad, dtype, dims)
 
         def fun(params):
-            return jax.pure_callback(host, out_shapes, params)
+            loss, grad = jax.pure_callback(host, out_shapes,
+                                           jax.lax.bitcast_convert_type(params, jnp.uint32))
+            return (jax.lax.bitcast_convert_type(loss, dtype),
+                    jax.lax.bitcast_convert_type(grad, dtype))
 
         o = self.options
         kwargs = {"value_and_grad": True, "history_size": o.history_size, "tol": o.tol,
@@ -139,7 +137,7 @@ class JaxoptLBFGS(Solver):
 
     def init_state(self, run):
         solver, extra, _ = self._setup(run)
-        with _float64_everywhere(run.problem.dtype):
+        with precision(run.problem.dtype):
             return {"jaxopt": solver.init_state(jnp.asarray(run.x), **extra)}
 
     def state_to_arrays(self, run):
@@ -149,13 +147,13 @@ class JaxoptLBFGS(Solver):
     def state_from_arrays(self, arrays, run):
         template = self.init_state(run)["jaxopt"]
         treedef = jax.tree_util.tree_structure(template)
-        with _float64_everywhere(run.problem.dtype):
+        with precision(run.problem.dtype):
             leaves = [jnp.asarray(arrays[f"{_LEAF}{i:03d}"]) for i in range(treedef.num_leaves)]
         return {"jaxopt": jax.tree_util.tree_unflatten(treedef, leaves)}
 
     def step(self, run) -> Step:
         solver, extra, cache = self._setup(run)
-        with _float64_everywhere(run.problem.dtype):
+        with precision(run.problem.dtype):
             params, state = solver.update(jnp.asarray(run.x), run.state["jaxopt"], **extra)
         # jaxopt's projected iterate may lie a rounding error outside the box
         x = run.problem.project(np.asarray(params, dtype=run.problem.dtype))

@@ -27,7 +27,8 @@ Rules
 solution fits the data to the noise, :math:`\chi^2(\theta_\lambda) \le \tau M` (Morozov 1966;
 Engl, Hanke & Neubauer 1996, §4.3). :func:`l_curve` (noise level unknown) takes the sweep point
 where the curve :math:`(\log\chi^2, \log\Phi)` bends most (Hansen 1992; Hansen & O'Leary
-1993). Both return a :class:`ParameterChoice`; :func:`plot_l_curve` draws either.
+1993). Both return a :class:`ParameterChoice`, which holds the sweep (the tried :math:`\lambda`,
+:math:`\chi^2` and :math:`\Phi`) for a plot of the L-curve.
 
 References
 ----------
@@ -46,7 +47,6 @@ import math
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -347,58 +347,6 @@ def l_curve(lams, chi2, phi, *, n_measurements: int | None = None) -> ParameterC
                f"among {lams.size} points")
     return _finish("l-curve", index, reached, summary, notes, lams, chi2, phi,
                    n_measurements=n_measurements, curvature=curvature)
-
-
-def plot_l_curve(choice: ParameterChoice, path, *,
-                 phi_label: str = r"regularizer $\Phi(\theta)$ [units of $\Phi$]") -> Path:
-    r"""Draw the sweep of ``choice`` as an L-curve (log–log) to a PNG, the choice marked.
-
-    The horizontal axis is :math:`\chi^2/M` (dimensionless, 1 at the noise level) when
-    :math:`M` is known, else :math:`\chi^2`; the discrepancy level :math:`\tau M`, if any, is a
-    dashed vertical line. Each point is labelled with its :math:`\lambda`.
-
-    Parameters
-    ----------
-    choice : ParameterChoice
-        Result of :func:`discrepancy_principle` or :func:`l_curve`.
-    path : str or Path
-        Output PNG; its folder is created if missing.
-    phi_label : str, optional
-        Vertical axis label with the units of :math:`\Phi` (e.g. ``"Φ, mean squared
-        gradient [K²/m²]"``).
-
-    Returns
-    -------
-    Path
-        ``path``.
-    """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    scale = 1.0 if choice.n_measurements is None else 1.0 / choice.n_measurements
-    misfit = choice.chi2 * scale
-    fig = Figure(figsize=(6.0, 4.5))
-    FigureCanvasAgg(fig)
-    ax = fig.add_subplot()
-    ax.loglog(misfit, choice.phi, "o-", color="0.3", ms=4, label="tried λ")
-    for lam, u, v in zip(choice.lams, misfit, choice.phi, strict=True):
-        ax.annotate(f"{lam:.2g}", (u, v), xytext=(4, 3), textcoords="offset points",
-                    fontsize=7, color="0.35")
-    if choice.target is not None:
-        ax.axvline(choice.target * scale, color="tab:blue", ls="--",
-                   label=f"discrepancy level χ² = τM = {choice.target:.4g}")
-    i = choice.index
-    ax.loglog(misfit[i], choice.phi[i], "*", color="red", ms=16,
-              label=f"chosen λ = {choice.lam:.3g}" + ("" if choice.reached else " (flagged)"))
-    xlabel = "whitened misfit χ²" if choice.n_measurements is None else (
-        f"whitened misfit per measurement χ²/M (M = {choice.n_measurements})")
-    ax.set(xlabel=xlabel + " [dimensionless]", ylabel=phi_label,
-           title={"discrepancy": "discrepancy principle", "l-curve": "L-curve"}[choice.rule])
-    ax.legend(fontsize=8)
-    fig.savefig(path, dpi=120, bbox_inches="tight")
-    return path
 
 
 def _check_count(n_measurements) -> None:

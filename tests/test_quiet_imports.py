@@ -5,7 +5,8 @@ fresh interpreter, which then reports whether torch got imported and whether JAX
 changed. Importing ``package.module`` runs the package's ``__init__`` first, so a module that the
 package's own import already loads is covered by the probe of the package: only the others get
 an interpreter of their own. The import graph of our packages, function-level imports
-included, has no cycle.
+included, has no cycle, and none of their modules imports matplotlib: figures are drawn by
+``invflame.plotting``.
 """
 
 import ast
@@ -115,6 +116,14 @@ def test_the_import_graph_of_our_packages_has_no_cycle():
     for node in sorted(graph):
         if node not in state:
             visit(node, [node])
+
+
+def test_operators_and_solvers_draw_nothing():
+    drawing = {package: sorted(module_name(path) for path in (REPO / package).rglob("*.py")
+                               if any(name.split(".")[0] == "matplotlib"
+                                      for name in imports_of(path)))
+               for package in PACKAGES}
+    assert drawing == {package: [] for package in PACKAGES}, "figures belong to invflame.plotting"
 
 
 def test_cycle_finder_sees_function_level_imports(tmp_path):

@@ -5,8 +5,8 @@ comparison table) say little without the machine that took them, and a compariso
 another machine mixes two. The runner records this description in each run's summary and
 log; ``invflame reproduce`` and ``study`` name it under their table.
 
-torch is imported by :func:`describe_machine` itself, so that the command line, which imports
-the tables' code to build its parser, starts without it.
+JAX and torch are imported by :func:`describe_machine` itself, so that the command line, which
+imports the tables' code to build its parser, starts without them.
 """
 
 from __future__ import annotations
@@ -15,8 +15,6 @@ import os
 import platform
 from pathlib import Path
 
-import jax
-import jaxlib
 import numpy as np
 
 import invflame
@@ -53,6 +51,8 @@ def describe_machine(uses_torch: bool = False) -> dict:
         CUDA one, its name; None where the run does not use torch) and ``versions``
         (invflame, JAX, jaxlib, torch, NumPy).
     """
+    import jax
+    import jaxlib
     import torch
 
     backend, kinds = jax.default_backend(), sorted({d.device_kind for d in jax.local_devices()})

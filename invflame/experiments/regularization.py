@@ -50,6 +50,8 @@ def choose_lambda(cfg: dict, scene: Scene, representation, measurement: Measurem
     log : callable
         Receives one line per trial.
     """
+    from invflame.plotting.parameter_choice import plot_l_curve  # matplotlib, once a run draws
+
     reg, solver = cfg["regularizer"], cfg["solver"]
     m = measurement.n_measurements
     per_epoch = representation.iterations_per_epoch
@@ -77,6 +79,6 @@ def choose_lambda(cfg: dict, scene: Scene, representation, measurement: Measurem
     low, high = reg["lambda_range"]
     choice = solvers.discrepancy_principle(solve_at, m, high, low, tau=tau, refine=2)
     write_json(out / "lambda_choice.json", choice.as_dict())
-    solvers.plot_l_curve(choice, out / "l_curve.png")
+    plot_l_curve(choice, out / "l_curve.png")
     log(choice.message)
     return choice

@@ -63,7 +63,8 @@ def test_solver_keeps_the_bounds_and_finds_the_bounded_minimizer(tikhonov_proble
 @pytest.mark.parametrize("name", solvers.available())
 def test_a_float64_run_leaves_jax_64_bit_mode_as_it_found_it(nonlinear_problem, name):
     """Every solver runs a float64 problem in float64 without JAX's 64-bit mode on for the
-    process, and leaves the mode off after (jaxopt's turns it on while it runs)."""
+    process, and leaves the mode as it found it: off, or on where the caller turned it on
+    (jaxopt's runs inside :func:`operators.precision`, the mode for the calling thread only)."""
     assert not jax.config.jax_enable_x64
     result = solvers.solve(nonlinear_problem, name, **{**NONLINEAR[name], "max_iter": 3})
     assert result.x.dtype == np.float64 and not jax.config.jax_enable_x64

@@ -13,7 +13,6 @@ import warnings
 import numpy as np
 import pylops
 import pytest
-from matplotlib.image import imread
 from scipy.optimize import brentq
 
 import operators as op
@@ -272,21 +271,3 @@ def test_choice_serializes_to_json():
     assert record["lam"] == choice.lam and record["rule"] == "l-curve"
     assert record["curvature"][0] is None and record["curvature"][4] > 0
     assert record["lams"] == choice.lams.tolist()
-
-
-def red_pixels(path):
-    image = imread(path)
-    return int(np.sum((image[..., 0] > 0.9) & (image[..., 1] < 0.15) & (image[..., 2] < 0.15)))
-
-
-def test_plot_marks_the_chosen_point(tmp_path, no_warnings):
-    toy = DiagonalTikhonov()
-    lams = 10.0 ** np.arange(-4, 5.0)
-    chi2, phi = np.array([toy(lam)[1:] for lam in lams]).T
-    corner = solvers.l_curve(lams, chi2, phi, n_measurements=N_DATA)
-    discrepancy = solvers.discrepancy_principle(toy, N_DATA, lam_max=1e4, lam_min=1e-4)
-    for name, choice in (("corner", corner), ("discrepancy", discrepancy)):
-        path = solvers.plot_l_curve(choice, tmp_path / "figs" / f"{name}.png",
-                                    phi_label="mean square [1]")
-        assert path.is_file() and path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-        assert red_pixels(path) > 50
