@@ -11,12 +11,13 @@ writes beside them
     ``X_CH4 [1]`` (float32). Written with ``pyevtk`` (raw appended binary).
 ``fields.nc``
     NetCDF-4 through ``xarray`` (``netCDF4`` engine): dimensions ``x``, ``y``, ``z`` with the
-    voxel centres in m as coordinates (and CF cell bounds), one variable per field set and
-    quantity named ``<set>_<quantity>`` (``truth_T``, ``start_X_CO2``,
+    voxel centres in m as coordinates (CF ``axis`` X, Y, Z, and cell bounds), one variable
+    per field set and quantity named ``<set>_<quantity>`` (``truth_T``, ``start_X_CO2``,
     ``reconstruction_X_H2O``, ...), each with ``units``, ``long_name`` and the CF
     ``standard_name``, stored in CF's recommended order ``(z, y, x)`` (x varies fastest, as
     the NetCDF readers of ParaView and VTK expect); global attributes say where the fields
-    come from (configuration, protocol, date, invflame version).
+    come from (configuration, protocol, date, ``history``, invflame version). No variable has
+    a ``_FillValue``: no value is missing.
 
 Every file is written beside its destination and then renamed over it, so a half-written
 file never replaces a good one.
@@ -116,16 +117,19 @@ def write_vti(field: Field, path) -> Path:
 
 
 def _coordinates(field: Field) -> dict[str, xr.Variable]:
-    """Voxel centres along x, y, z (m) with their CF cell bounds."""
+    """Voxel centres along x, y, z (m), each with its CF ``axis`` and its cell bounds.
+
+    Each centre's ``bounds`` is in its encoding, where xarray writes it as the attribute and
+    keeps the bounds variable out of a global ``coordinates`` attribute.
+    """
     grid, centres = field.grid, field.grid.axes()
     coords = {}
     for a, axis in enumerate(_AXES):
         edges = np.linspace(grid.lower[a], grid.upper[a], grid.shape[a] + 1)
-        attrs = {"units": "m", "long_name": f"{axis} of the voxel centre",
-                 "bounds": f"{axis}_bounds"}
+        attrs = {"units": "m", "long_name": f"{axis} of the voxel centre", "axis": axis.upper()}
         if a == grid.up_axis:
             attrs["positive"] = "up"
-        coords[axis] = xr.Variable(axis, centres[a], attrs)
+        coords[axis] = xr.Variable(axis, centres[a], attrs, {"bounds": f"{axis}_bounds"})
         coords[f"{axis}_bounds"] = xr.Variable((axis, "bounds"),
                                                np.stack([edges[:-1], edges[1:]], axis=1))
     return coords
@@ -141,12 +145,14 @@ def fields_dataset(fields: dict[str, Field], attributes: dict | None = None) -> 
         the same grid.
     attributes : dict, optional
         Global attributes (str or numbers), added to ``Conventions``, ``source``,
-        ``invflame_version``, ``up_axis`` and ``date_created``.
+        ``invflame_version``, ``up_axis``, ``field_sets``, ``date_created`` (ISO 8601, UTC)
+        and ``history`` (when and by what the dataset was made).
 
     Returns
     -------
     xarray.Dataset
-        Dimensions ``x``, ``y``, ``z`` (voxel centres in m, with ``x_bounds``, ...), a variable
+        Dimensions ``x``, ``y``, ``z`` (voxel centres in m with CF ``axis`` "X", "Y", "Z" and
+        cell bounds ``x_bounds``, ...), a variable
         ``<set>_<quantity>`` per field set and quantity (``truth_T`` [K], ``start_X_CO2`` [1],
         ...) over ``(z, y, x)`` with ``units``, ``long_name``, ``standard_name`` and
         ``field_set`` (``variable.transpose("x", "y", "z")`` is the field's ``[ix, iy, iz]``
@@ -178,6 +184,7 @@ def fields_dataset(fields: dict[str, Field], attributes: dict | None = None) -> 
              "up_axis": _AXES[first.grid.up_axis],
              "field_sets": " ".join(fields),
              "date_created": now,
+             "history": f"{now}: written by invflame {__version__} (invflame.export)",
              **(attributes or {})}
     return xr.Dataset(variables, coords=_coordinates(first), attrs=attrs)
 
@@ -202,8 +209,11 @@ def write_netcdf(fields: dict[str, Field], path, attributes: dict | None = None)
     dataset = fields_dataset(fields, attributes)
 
     def write(temporary: Path) -> Path:
+        # compressed fields; no value is missing anywhere, coordinates and bounds included
         encoding = {name: {"zlib": True, "complevel": 4, "_FillValue": None}
-                    for name in dataset.data_vars}  # compressed; no value is missing
+                    for name in dataset.data_vars}
+        encoding.update({name: {**dataset[name].encoding, "_FillValue": None}
+                         for name in dataset.coords})
         dataset.to_netcdf(temporary, engine="netcdf4", format="NETCDF4", encoding=encoding)
         return temporary
 

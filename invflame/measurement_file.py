@@ -11,27 +11,32 @@ variable            dimensions                 units: meaning
 ``radiance``        (camera, v, u, wavenumber) W/(m2 sr cm-1): the measured spectra,
                                                ``image[v, u]`` with row 0 at the top
 ``wavenumber``      (wavenumber)               cm-1, coordinate: any strictly monotone
-                                               grid (irregular allowed)
+                                               grid of positive values (irregular allowed)
 ``nesr``            (wavenumber)               W/(m2 sr cm-1): noise standard deviation
                                                per wavenumber, or
 ``sigma``           (camera, v, u, wavenumber) W/(m2 sr cm-1): one per value (neither:
                                                noise unknown, an unweighted misfit)
-``bad_pixel``       (camera, v, u)             1 for a pixel to leave out, else 0
-``bad_wavenumber``  (wavenumber)               1 for a wavenumber to leave out, else 0
+``bad_pixel``       (camera, v, u)             optional, 1 for a pixel to leave out, else 0
+                                               (absent: every pixel kept)
+``bad_wavenumber``  (wavenumber)               optional, 1 for a wavenumber to leave out,
+                                               else 0 (absent: every wavenumber kept)
 ``position``        (camera, xyz)              m: the cameras' pinholes
 ``look_at``         (camera, xyz)              m: a point on each optical axis
 ``up``              (camera, xyz)              1: each image's up direction
 ``focal_length``    (camera)                   m
 ``sensor_size``     (camera, uv)               m: (width, height)
-``principal_point`` (camera, uv)               pixel: (u, v) from the top-left corner
+``principal_point`` (camera, uv)               pixel, optional: (u, v) from the top-left
+                                               corner (absent: the sensor's centre)
 =================== ========================== =========================================
 
 The camera variables are the records of a rig file (:mod:`invflame.geometry.rig_file`),
 with the pixel counts from the ``u`` and ``v`` dimensions, so the rig round-trips to that
-format. Global attributes: ``resolution`` (cm-1, 1/MOPD) and ``apodization``
-(``"triangular"``) of the instrument, ``noise`` (``"nesr"``, ``"sigma"`` or ``"none"``),
-``provenance`` (JSON: how the data were made), ``Conventions``, ``invflame_version``,
-``date_created``.
+format. Global attributes: ``resolution`` (cm-1, 1/MOPD, finer than the measured band) and
+``apodization`` (``"triangular"``) of the instrument, ``noise`` (``"nesr"``, ``"sigma"`` or
+``"none"``), ``provenance`` (JSON: how the data were made), ``Conventions``,
+``invflame_version``, ``date_created``. :func:`read_measurement` refuses a malformed file and
+warns about radiance no flame can have emitted (:mod:`invflame.measurement_checks`); the user
+guide's page *Measurement files* shows how to write one by hand.
 
 **Masks.** ``radiance`` (and ``nesr`` or ``sigma``) may be NaN only where masked. In memory
 (:class:`~invflame.experiments.measurement.Measurement`), a masked value has ``sigma = inf`` —
@@ -51,10 +56,10 @@ import xarray as xr
 
 from invflame import __version__
 from invflame.atomic_files import read_netcdf, write_atomic
-from invflame.errors import InputDataError
 from invflame.experiments.measurement import Measurement
 from invflame.geometry import CameraRig
 from invflame.geometry.rig_file import APODIZATIONS, parse_rig, rig_records
+from invflame.measurement_checks import MeasurementReader, warn_implausible
 
 RADIANCE_UNITS = "W/(m2 sr cm-1)"
 """``units`` of ``radiance``, ``nesr`` and ``sigma``."""
@@ -100,6 +105,38 @@ class MeasurementFile:
     wavenumber: np.ndarray
     resolution: float
     apodization: str = "triangular"
+
+    def instrument(self, source: str) -> dict:
+        """The instrument the data set for a run in place of ``[instrument]``, for its records.
+
+        Parameters
+        ----------
+        source : str
+            The file, as the configuration names it (``data.source``).
+
+        Returns
+        -------
+        dict
+            ``from`` (where the settings come from, in words), ``resolution`` (cm⁻¹),
+            ``apodization``, ``wavenumber_min`` and ``wavenumber_max`` (cm⁻¹) and
+            ``n_wavenumbers``.
+        """
+        return {"from": f"the measurement file data.source = {source!r}, in place of "
+                        "[instrument]",
+                "resolution": float(self.resolution), "apodization": self.apodization,
+                "wavenumber_min": float(np.min(self.wavenumber)),
+                "wavenumber_max": float(np.max(self.wavenumber)),
+                "n_wavenumbers": int(self.wavenumber.size)}
+
+    def instrument_comment(self, source: str) -> str:
+        """TOML comment lines saying what :meth:`instrument` says, for a run's
+        ``config.toml`` (whose ``[instrument]`` the data replace)."""
+        used = self.instrument(source)
+        return (f"# [instrument] is not used: the measurement file data.source = {source!r} "
+                "sets the instrument:\n"
+                f"# resolution = {used['resolution']:g} cm-1, apodization = "
+                f"{used['apodization']!r}, {used['n_wavenumbers']} wavenumbers "
+                f"{used['wavenumber_min']:g}-{used['wavenumber_max']:g} cm-1\n")
 
 
 def _mask(measurement: Measurement, rig: CameraRig) -> tuple[np.ndarray, np.ndarray]:
@@ -194,40 +231,6 @@ def write_measurement(measured: MeasurementFile, path) -> Path:
     return write_atomic(path, lambda handle: handle.write(content))
 
 
-class _Reader:
-    """Checked access to the variables of an open measurement file."""
-
-    def __init__(self, dataset: xr.Dataset, path: Path):
-        self.dataset, self.path = dataset, path
-
-    def fail(self, message: str):
-        raise InputDataError(f"{self.path}: {message}")
-
-    def variable(self, name: str, dims: tuple[str, ...], units: str | None) -> np.ndarray:
-        if name not in self.dataset.variables:
-            self.fail(f"missing variable {name!r} (dimensions {dims}"
-                      + (f", units {units!r}" if units else "") + "); a measurement file "
-                      "holds the variables of invflame.measurement_file")
-        var = self.dataset[name]
-        if var.dims != dims:
-            self.fail(f"variable {name!r} has dimensions {var.dims}, expected {dims}")
-        if units is not None and var.attrs.get("units") != units:
-            self.fail(f"variable {name!r} has units {var.attrs.get('units')!r}, expected "
-                      f"{units!r}; convert it to {units}")
-        return np.asarray(var.values)
-
-    def attribute(self, name: str):
-        if name not in self.dataset.attrs:
-            self.fail(f"missing global attribute {name!r}")
-        return self.dataset.attrs[name]
-
-    def positive(self, name: str, values: np.ndarray, masked: np.ndarray) -> None:
-        ok = np.isnan(values) & masked | (values > 0)
-        if not np.all(ok):
-            self.fail(f"variable {name!r} must be positive where not masked (NaN allowed only "
-                      f"in bad pixels and wavenumbers); {int((~ok).sum())} values are not")
-
-
 def read_measurement(path, rig: CameraRig | None = None,
                      rig_source: str = "the rig") -> MeasurementFile:
     """Read a measurement file (see the module docstring), checking every variable.
@@ -252,37 +255,40 @@ def read_measurement(path, rig: CameraRig | None = None,
     FileNotFoundError
         If there is no file at ``path``.
     InputDataError
-        For a file that is not NetCDF, a missing variable or attribute, wrong dimensions or
-        units, a shape or camera that does not match ``rig``, NaN outside the mask, a
-        wavenumber grid that is not strictly monotone or noise that is not positive; the
-        message names the file and the variable.
+        For a file that is not NetCDF, a missing required variable or attribute, wrong
+        dimensions or units, a shape or camera that does not match ``rig``, NaN outside the
+        mask, masks that are not 0/1 flags or leave out every pixel or wavenumber, wavenumbers
+        that are not positive and strictly monotone, a resolution coarser than the measured
+        band or noise that is not positive; the message names the file and the variable.
+
+    Warns
+    -----
+    MeasurementWarning
+        For a camera whose radiance no flame can have emitted as it stands: negative on the
+        whole, or beyond a black body's at :data:`~invflame.measurement_checks.HOTTEST_FLAME`
+        (:func:`~invflame.measurement_checks.warn_implausible`).
     """
     path = Path(path)
     dataset = read_netcdf(path, "measurement file")
-    read = _Reader(dataset, path)
+    read = MeasurementReader(dataset, path)
     radiance = read.variable("radiance", DIMS, RADIANCE_UNITS)
     wavenumber = read.variable("wavenumber", ("wavenumber",), "cm-1").astype(np.float64)
-    steps = np.diff(wavenumber)
-    if not (np.all(np.isfinite(wavenumber)) and (np.all(steps > 0) or np.all(steps < 0))):
-        read.fail("variable 'wavenumber' must be finite and strictly monotone (cm-1)")
+    read.check_wavenumber(wavenumber)
     n_cameras, nv, nu, n_out = radiance.shape
-    records = {name: read.variable(name, dims, units)
+    records = {name: read.variable(name, dims, units, required=name != "principal_point")
                for name, (dims, units, _) in CAMERA_VARIABLES.items()}
-    spec = parse_rig([{key: values[i].tolist() for key, values in records.items()}
-                      | {"pixels": [nu, nv]} for i in range(n_cameras)], str(path))
+    spec = parse_rig([{key: values[i].tolist() for key, values in records.items()
+                       if values is not None} | {"pixels": [nu, nv]}
+                      for i in range(n_cameras)], str(path))
     if rig is not None:
         _check_same_rig(read, spec.rig, rig, rig_source)
-    bad_pixel = read.variable("bad_pixel", DIMS[:3], None).astype(bool).reshape(-1)
-    bad_wavenumber = read.variable("bad_wavenumber", ("wavenumber",), None).astype(bool)
+    bad_pixel = read.flags("bad_pixel", DIMS[:3], "pixel")
+    bad_wavenumber = read.flags("bad_wavenumber", ("wavenumber",), "wavenumber")
+    read.check_mask(bad_pixel, bad_wavenumber)
+    bad_pixel = bad_pixel.reshape(-1)
     masked = bad_pixel[:, None] | bad_wavenumber[None, :]
     data = radiance.reshape(-1, n_out)
-    if np.any(np.isnan(data) & ~masked) or np.any(np.isinf(data)):
-        where = np.argwhere(~np.isfinite(data) & ~masked)[0]
-        camera, pixel = divmod(int(where[0]), nu * nv)
-        read.fail(f"variable 'radiance' holds {int((~np.isfinite(data) & ~masked).sum())} "
-                  f"NaN or infinite values outside the mask, the first at camera {camera}, "
-                  f"v {pixel // nu}, u {pixel % nu}, wavenumber {wavenumber[where[1]]:g} cm-1; "
-                  "flag those pixels in 'bad_pixel' or wavenumbers in 'bad_wavenumber'")
+    read.check_finite(data, masked, wavenumber, nu, nv)
     noise = read.attribute("noise")
     if noise == "nesr":
         sigma = read.variable("nesr", ("wavenumber",), RADIANCE_UNITS).astype(np.float64)
@@ -294,14 +300,8 @@ def read_measurement(path, rig: CameraRig | None = None,
         sigma = np.ones(n_out)
     else:
         read.fail(f"global attribute 'noise' = {noise!r}; allowed: 'nesr', 'sigma', 'none'")
-    if sigma.ndim == 2 or bad_pixel.any():
-        sigma = np.where(masked, np.inf, np.broadcast_to(sigma, data.shape))
-    else:
-        sigma = np.where(bad_wavenumber, np.inf, sigma)
     resolution = read.attribute("resolution")
-    if not (isinstance(resolution, int | float | np.number) and resolution > 0):
-        read.fail(f"global attribute 'resolution' must be a positive number in cm-1, got "
-                  f"{resolution!r}")
+    read.check_resolution(resolution, wavenumber)
     apodization = read.attribute("apodization")
     if apodization not in APODIZATIONS:
         read.fail(f"global attribute 'apodization' = {apodization!r} is not modelled; allowed: "
@@ -310,12 +310,19 @@ def read_measurement(path, rig: CameraRig | None = None,
         provenance = json.loads(dataset.attrs.get("provenance", "{}"))
     except json.JSONDecodeError as err:
         read.fail(f"global attribute 'provenance' is not JSON: {err}")
+    known = None if noise == "none" else np.broadcast_to(sigma, data.shape).reshape(radiance.shape)
+    warn_implausible(radiance, known, masked.reshape(radiance.shape), wavenumber, path)
+    if sigma.ndim == 2 or bad_pixel.any():
+        sigma = np.where(masked, np.inf, np.broadcast_to(sigma, data.shape))
+    else:
+        sigma = np.where(bad_wavenumber, np.inf, sigma)
     measurement = Measurement(np.where(masked, 0, data).astype(data.dtype), sigma,
                               noise != "none", provenance)
     return MeasurementFile(measurement, spec.rig, wavenumber, float(resolution), apodization)
 
 
-def _check_same_rig(read: _Reader, found: CameraRig, expected: CameraRig, source: str) -> None:
+def _check_same_rig(read: MeasurementReader, found: CameraRig, expected: CameraRig,
+                    source: str) -> None:
     """Refuse a file whose cameras are not ``expected``'s, naming the first difference."""
     if found.image_shapes != expected.image_shapes:
         read.fail(f"variable 'radiance' holds {found.n_cameras} camera(s) of image shape "

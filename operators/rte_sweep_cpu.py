@@ -460,24 +460,43 @@ def _source_file(source: str, stem: str) -> Path:
 
     The name carries a hash of the source and of this module, so a file once written never
     changes (Numba keys its cache on the file's time stamp; a change to the helpers here makes
-    new files). The folder is ``sweeps`` in :func:`operators.disk_cache.cache_dir`, or, if that
-    cannot be written, ``invflame-sweeps`` in the temporary directory.
+    new files). A file found there is read back and used only if it holds ``source`` exactly;
+    one that does not (damaged, cut short) is written again, which also gives it a new time
+    stamp, so that Numba compiles it afresh. Each write fills a uniquely named temporary file,
+    flushes it to disk and renames it over the file: no process reads half a file. The
+    folder is ``sweeps`` in :func:`operators.disk_cache.cache_dir`, or, if that cannot be
+    written, ``invflame-sweeps`` in the temporary directory.
     """
     digest = hashlib.sha256(source.encode() + Path(__file__).read_bytes()).hexdigest()[:16]
     folders = (cache_dir() / "sweeps", Path(tempfile.gettempdir()) / "invflame-sweeps")
     for folder in folders:
         path = folder / f"{stem}_{digest}.py"
         try:
-            if not path.exists():  # written whole, then renamed: no process reads half a file
+            if not _holds(path, source):
                 folder.mkdir(parents=True, exist_ok=True)
-                partial = folder / f".{path.name}.{os.getpid()}"
-                partial.write_text(source)
-                os.replace(partial, path)
+                fd, partial = tempfile.mkstemp(dir=folder, prefix=f".{path.name}.")
+                try:
+                    with os.fdopen(fd, "w", encoding="utf-8") as handle:
+                        handle.write(source)
+                        handle.flush()
+                        os.fsync(handle.fileno())
+                    os.replace(partial, path)
+                except BaseException:
+                    os.unlink(partial)
+                    raise
             return path
         except OSError as error:
             failure = error
     raise OSError(f"cannot write the compiled sweeps' source to {folders[0]} or "
                   f"{folders[1]}; set INVFLAME_CACHE to a writable folder") from failure
+
+
+def _holds(path: Path, source: str) -> bool:
+    """Whether the file ``path`` exists and holds ``source`` exactly."""
+    try:
+        return path.read_bytes() == source.encode()
+    except FileNotFoundError:
+        return False
 
 
 #: The sweeps, by the names :func:`target` takes.

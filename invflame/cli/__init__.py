@@ -10,6 +10,10 @@ afresh (:func:`invflame.process_memory.configure_malloc`).
 Bad input (:class:`invflame.errors.InvflameError`, a damaged or missing file) ends the command
 with its message on stderr and exit status 2, without a traceback; ``--debug`` shows the
 traceback.
+
+Building the parser imports no array library: ``invflame --help``, ``invflame --version`` and
+``invflame COMMAND --help`` answer at once. A command imports what it computes with (JAX,
+torch, the operators) inside the function that runs it.
 """
 
 from __future__ import annotations
@@ -32,7 +36,6 @@ from invflame.cli import (
 )
 from invflame.errors import InvflameError
 from invflame.process_memory import configure_malloc
-from solvers.atomic import CorruptFileError
 
 COMMANDS = [reproduce, experiment, config, export, sweep, demo, phantom, lines, co2, rig]
 
@@ -53,6 +56,18 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def bad_input_errors() -> tuple[type[Exception], ...]:
+    """The exceptions that :func:`main` reports as bad input: a message, exit status 2.
+
+    :class:`solvers.atomic.CorruptFileError` (a damaged file) is imported here, when an error is
+    being handled, since importing :mod:`solvers` imports JAX.
+    """
+    from solvers.atomic import CorruptFileError
+
+    return (InvflameError, CorruptFileError, FileNotFoundError, NotADirectoryError,
+            IsADirectoryError)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``invflame`` command; returns the process exit code (2 for bad
     input, whose message goes to stderr)."""
@@ -60,8 +75,7 @@ def main(argv: list[str] | None = None) -> int:
     configure_malloc()  # long runs: memory that does not creep, no page faults (module notes)
     try:
         return int(args.func(args) or 0)
-    except (InvflameError, CorruptFileError, FileNotFoundError, NotADirectoryError,
-            IsADirectoryError) as err:
+    except bad_input_errors() as err:  # evaluated only when the command raised
         if args.debug:
             raise
         print(f"invflame {args.command}: error: {err}", file=sys.stderr)

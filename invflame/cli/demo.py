@@ -4,11 +4,6 @@ from __future__ import annotations
 
 import argparse
 
-import jax.numpy as jnp
-import numpy as np
-
-import operators as op
-
 
 def add_parser(subparsers) -> None:
     """Register ``invflame demo``."""
@@ -26,6 +21,11 @@ def add_parser(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Print the checks; exit code 1 if any fails."""
+    import jax.numpy as jnp
+    import numpy as np
+
+    import operators as op
+
     rng = np.random.default_rng(args.seed)
     dims = (4, 6, 5, 3)
     eta = np.arange(650.0, 725.0 + 1e-9, 0.04)

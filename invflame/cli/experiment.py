@@ -5,11 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import numpy as np
-
 from invflame.cli import arguments
 from invflame.errors import ConfigError
-from invflame.experiments import config as configuration
 
 CONFIG_HELP = ("experiment configuration (TOML); every key has a default, see "
                "invflame.experiments.config for the sections and allowed values")
@@ -25,9 +22,14 @@ def add_parser(subparsers) -> None:
     run.add_argument("config", type=Path, help=CONFIG_HELP)
     run.add_argument("--out", type=arguments.folder, default="results/run",
                      help="output folder (default results/run)")
-    run.add_argument("--resume", action="store_true",
-                     help="continue an interrupted run from its checkpoint; refused if the "
-                     "configuration, the truth, the measured data or the code changed since")
+    again = run.add_mutually_exclusive_group()
+    again.add_argument("--resume", action="store_true",
+                       help="continue an interrupted run from its checkpoint; refused if the "
+                       "configuration, the truth, the measured data or the code changed since")
+    again.add_argument("--overwrite", action="store_true",
+                       help="replace the run in --out (its results are deleted once the new "
+                       "run's inputs have loaded), or write into a folder holding other files; "
+                       "without it, a folder that is neither new nor empty is refused")
     run.add_argument("--force", action="store_true",
                      help="with --resume: continue even if something changed, recording what "
                      "in log.txt and summary.json")
@@ -74,19 +76,24 @@ def simulation_output(text: str) -> Path:
 
 def run_command(args: argparse.Namespace) -> int:
     """``invflame run``."""
+    from invflame.experiments import config as configuration
     from invflame.experiments.figures import comparison_figures
+    from invflame.experiments.run_folder import check_run_target
     from invflame.experiments.runner import run_experiment
+    from invflame.experiments.summaries import misfit_name
 
     if args.force and not args.resume:
         raise ConfigError("--force only applies to --resume (continue a changed run anyway): "
                           "add --resume, or drop --force")
+    check_run_target(args.out, resume=args.resume, overwrite=args.overwrite)
     summary = run_experiment(configuration.load(args.config), args.out, resume=args.resume,
                              progress=not args.quiet, force=args.force)
     if "mse" in summary:  # scored against a ground truth
         comparison_figures(args.out, {"reconstruction": args.out})
         print(f"normalized MSE: {summary['mse']}; results in {args.out}")
     else:
-        print(f"chi2/M {summary['chi2_per_measurement']['final']:.4g} (no ground truth); "
+        print(f"{misfit_name(summary['noisy_data'])} "
+              f"{summary['chi2_per_measurement']['final']:.4g} (no ground truth); "
               f"results in {args.out}")
     return 0
 
@@ -97,9 +104,10 @@ def simulate_command(args: argparse.Namespace) -> int:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import numpy as np
 
     from invflame.atomic_files import write_atomic, write_npz
-    from invflame.errors import ConfigError
+    from invflame.experiments import config as configuration
     from invflame.experiments.runner import build_scene, load_truth, measure
     from invflame.measurement_file import MeasurementFile, write_measurement
 
@@ -142,15 +150,18 @@ def plot_command(args: argparse.Namespace) -> int:
     """``invflame plot``."""
     from invflame.experiments.figures import comparison_figures
     from invflame.experiments.reproduce import METHODS, folder_name
+    from invflame.experiments.run_folder import finished_runs
 
-    folder = args.folder
-    if (folder / "summary.json").is_file():
-        runs = {"reconstruction": folder}
+    found = finished_runs(args.folder)
+    if found == [args.folder]:
+        runs = {"reconstruction": args.folder}
     else:
-        runs = {m: folder / folder_name(m) for m in METHODS
-                if (folder / folder_name(m) / "summary.json").is_file()}
+        runs = {m: args.folder / folder_name(m) for m in METHODS
+                if args.folder / folder_name(m) in found}
     if not runs:
-        raise SystemExit(f"{folder} holds no finished run (summary.json) nor comparison")
-    for path in comparison_figures(folder, runs):
+        raise FileNotFoundError(f"{args.folder} holds no comparison of 'invflame reproduce' "
+                                f"(sub-folders {', '.join(folder_name(m) for m in METHODS)}): "
+                                "give its output folder, or one run's")
+    for path in comparison_figures(args.folder, runs):
         print(f"wrote {path}")
     return 0

@@ -29,36 +29,13 @@ def add_parser(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
-def run_folders(folder: Path) -> list[Path]:
-    """The run folders in ``folder``: itself if it holds a reconstruction, else its
-    sub-folders that do (a comparison).
-
-    Raises
-    ------
-    SystemExit
-        If there is no such folder, naming what was looked for.
-    """
-    from invflame.export import FIELD_SETS
-
-    result = FIELD_SETS["reconstruction"]
-    if not folder.is_dir():
-        raise SystemExit(f"invflame export: {folder} is not a folder; give the output folder "
-                         "of 'invflame run', 'study' or 'reproduce'")
-    if (folder / result).is_file():
-        return [folder]
-    runs = sorted(path.parent for path in folder.glob(f"*/{result}"))
-    if not runs:
-        raise SystemExit(f"invflame export: {folder} holds no {result}, nor do its sub-folders: "
-                         "no finished run to export (a run writes it when its solver ends)")
-    return runs
-
-
 def run(args: argparse.Namespace) -> int:
     """``invflame export``."""
-    from invflame.export import FORMATS, export_run
+    from invflame.experiments.run_folder import finished_runs
+    from invflame.export import FIELD_SETS, FORMATS, export_run
 
     formats = FORMATS if args.format == "all" else (args.format,)
-    for folder in run_folders(args.folder):
+    for folder in finished_runs(args.folder, FIELD_SETS["reconstruction"]):
         for path in export_run(folder, formats):
             print(f"wrote {path}")
     return 0

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import argparse
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from invflame.cli import arguments
 from invflame.errors import ConfigError
+
+if TYPE_CHECKING:
+    import numpy as np
 
 
 def add_parser(subparsers) -> None:
@@ -66,6 +68,8 @@ def slab_radiance(table, temperature: float, mole_fractions, length: float) -> n
     length : float
         Slab thickness in m.
     """
+    import numpy as np
+
     from operators.planck import planck
 
     kappa = table.kappa(np.asarray(temperature), np.asarray(mole_fractions, dtype=float))
@@ -78,6 +82,7 @@ def run(args: argparse.Namespace) -> int:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import numpy as np
 
     from invflame.spectroscopy.absorption_table import AbsorptionTable
     from operators.ils import ILSConvolution

@@ -4,16 +4,23 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from invflame.cli import arguments
-from invflame.field import Field
-from invflame.geometry import VoxelGrid
-from invflame.phantoms import PHANTOMS, make_phantom
 
-_SOURCE_HELP = (
-    f"a field .npz file or a phantom name ({', '.join(sorted(PHANTOMS))}); names build the "
-    "default phantom on its default grid"
-)
+if TYPE_CHECKING:
+    from invflame.field import Field
+
+
+def _phantom_names() -> list[str]:
+    """The registered phantoms' names, sorted."""
+    from invflame.phantoms import PHANTOMS
+
+    return sorted(PHANTOMS)
+
+
+_SOURCE_HELP = ("a field .npz file or a phantom name (as 'invflame phantom write' takes); names "
+                "build the default phantom on its default grid")
 
 
 def add_parser(subparsers) -> None:
@@ -45,7 +52,8 @@ def add_parser(subparsers) -> None:
         "sets the synthetic plume's resolution on the pool-fire box (x, z in [-0.5, 0.5] m, "
         "y in [0, 1] m, y up).",
     )
-    write.add_argument("name", choices=sorted(PHANTOMS), help="phantom name")
+    write.add_argument("name", choices=arguments.Choices(_phantom_names), metavar="NAME",
+                       help="phantom name: %(choices)s")
     write.add_argument("--out", type=Path, required=True, help="output field .npz (overwritten)")
     write.add_argument("--n", type=arguments.count, default=None,
                        help="voxels per axis (default: native)")
@@ -93,6 +101,9 @@ def add_parser(subparsers) -> None:
 
 def load_source(source: str) -> Field:
     """A field from a registered phantom name or a ``.npz`` path."""
+    from invflame.field import Field
+    from invflame.phantoms import PHANTOMS, make_phantom
+
     if source in PHANTOMS:
         return make_phantom(source)
     path = Path(source)
@@ -117,6 +128,9 @@ def run_from_openfoam(args: argparse.Namespace) -> int:
 
 def run_write(args: argparse.Namespace) -> int:
     """Build the phantom and save it; print the summary."""
+    from invflame.geometry import VoxelGrid
+    from invflame.phantoms import make_phantom
+
     kwargs = {}
     if args.n is not None:
         kwargs["grid"] = VoxelGrid.poolfire(args.n)

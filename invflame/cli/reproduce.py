@@ -40,12 +40,24 @@ def add_parser(subparsers) -> None:
     study.set_defaults(func=run, protocol="honest")
 
 
-def _add_common(parser: argparse.ArgumentParser, default_out: str) -> None:
-    from invflame.experiments.reproduce import METHODS, PRESETS
+def _preset_names() -> list[str]:
+    """The presets of :mod:`invflame.experiments.reproduce`, sorted."""
+    from invflame.experiments.reproduce import PRESETS
 
-    parser.add_argument("--preset", choices=sorted(PRESETS), default="quick",
-                        help="quick: 30^3 voxels, 16^2 px, 0.08 cm-1 (default); paper: 60^3, "
-                        "32^2 px, 0.04 cm-1, 2000 epochs")
+    return sorted(PRESETS)
+
+
+def _method_names() -> list[str]:
+    """The methods of :mod:`invflame.experiments.reproduce`, in the order of its table."""
+    from invflame.experiments.reproduce import METHODS
+
+    return list(METHODS)
+
+
+def _add_common(parser: argparse.ArgumentParser, default_out: str) -> None:
+    parser.add_argument("--preset", choices=arguments.Choices(_preset_names), default="quick",
+                        metavar="PRESET", help="quick: 30^3 voxels, 16^2 px, 0.08 cm-1 "
+                        "(default); paper: 60^3, 32^2 px, 0.04 cm-1, 2000 epochs")
     parser.add_argument("--truth", default="poolfire", metavar="SOURCE",
                         help="ground truth: 'poolfire' (the packaged OpenFOAM pool fire, "
                         "default), 'synthetic' (a McCaffrey plume) or a field .npz file (e.g. "
@@ -54,8 +66,8 @@ def _add_common(parser: argparse.ArgumentParser, default_out: str) -> None:
                         help=f"output folder (default {default_out})")
     parser.add_argument("--resume", action="store_true",
                         help="keep finished methods, continue interrupted ones")
-    parser.add_argument("--methods", nargs="+", choices=list(METHODS), metavar="METHOD",
-                        help=f"subset of the methods: {', '.join(METHODS)}")
+    parser.add_argument("--methods", nargs="+", choices=arguments.Choices(_method_names),
+                        metavar="METHOD", help="subset of the methods: %(choices)s")
     parser.add_argument("--seed", type=int, default=0,
                         help="seed of the noise, the start and stochastic solvers (default 0)")
     parser.add_argument("--quiet", action="store_true", help="no progress bars or log echo")

@@ -13,10 +13,14 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from invflame.atomic_files import read_json  # noqa: E402
+from invflame.experiments import config as configuration  # noqa: E402
+from invflame.experiments.inputs import read_data, scene_rig  # noqa: E402
 from invflame.experiments.metrics import normalized_mse  # noqa: E402
 from invflame.field import Field  # noqa: E402
+from invflame.geometry import CameraRig  # noqa: E402
 from invflame.plotting.comparison import plot_comparison, plot_errors  # noqa: E402
 from invflame.plotting.isosurfaces import plot_isotherms_3d  # noqa: E402
+from invflame.plotting.spectra import plot_spectrum_and_images  # noqa: E402
 
 
 def read_history(path) -> dict[str, np.ndarray]:
@@ -26,27 +30,54 @@ def read_history(path) -> dict[str, np.ndarray]:
     return {key: np.array([float(r[key]) for r in rows]) for key in rows[0]} if rows else {}
 
 
-def loss_series(runs: dict[str, Path]) -> dict[str, dict[str, np.ndarray | None]]:
+def noise_weighted(summary: dict) -> bool | None:
+    """Whether a run's data misfit is the noise-weighted χ² = ‖(F(θ) − d)/σ‖² (dimensionless)
+    rather than ‖F(θ) − d‖² in (W/(m²·sr·cm⁻¹))²: as its summary records it
+    (``noise_weighted_misfit``), else as its configuration says (``regularizer.scaling =
+    "chi2"`` with measured data or synthetic data with noise; a measurement file may hold no
+    noise, which only the record tells). None for a summary with neither.
+
+    Parameters
+    ----------
+    summary : dict
+        A run's ``summary.json``.
+    """
+    if summary.get("noise_weighted_misfit") is not None:
+        return summary["noise_weighted_misfit"]
+    cfg = summary.get("config")  # a run from before the summary recorded it
+    if cfg is None:
+        return None
+    return (cfg["regularizer"]["scaling"] == "chi2"
+            and bool(cfg["data"]["source"] or cfg["noise"]["kind"] != "none"))
+
+
+def loss_series(runs: dict[str, Path]) -> dict[str, dict]:
     """Each run's objective and data misfit against epochs, from its ``history.csv``.
 
     An iteration is an epoch for the voxel solvers and one batch of rays for the neural field;
     the run's ``summary.json`` (iterations and epochs) sets the scale, one iteration per epoch
     without it. ``misfit`` is None for a run that logged none (a stochastic neural-field run
-    logs its loss only).
+    logs its loss only); ``noise_weighted`` says which misfit it is (:func:`noise_weighted`;
+    None without a summary).
     """
     series = {}
     for label, folder in runs.items():
         history = read_history(Path(folder) / "history.csv")
         summary = Path(folder) / "summary.json"
-        per_iteration = 1.0
-        if summary.exists():
-            done = read_json(summary)
-            per_iteration = done["epochs"] / done["iterations"] if done["iterations"] else 1.0
+        done = read_json(summary) if summary.exists() else {}
+        per_iteration = done["epochs"] / done["iterations"] if done.get("iterations") else 1.0
         misfit = history["misfit"]
         series[label] = {"epoch": history["iteration"] * per_iteration, "loss": history["loss"],
-                         "misfit": misfit if np.isfinite(misfit).any() else None}
+                         "misfit": misfit if np.isfinite(misfit).any() else None,
+                         "noise_weighted": noise_weighted(done)}
     return series
 
+
+MISFIT_LABELS = {True: "noise-weighted χ² = ‖(F(θ) − d)/σ‖² [1]",
+                 False: "‖F(θ) − d‖² [(W/(m²·sr·cm⁻¹))²]",
+                 None: "data misfit (weighting not recorded)"}
+"""The misfit axis's label for a noise-weighted run, an unweighted one, and one whose summary
+does not say (:func:`noise_weighted`)."""
 
 #: Line styles of the runs' curves, in turn: a later run's curve lies over an earlier one's
 #: that it follows closely (the three neural-field rows of a study, a few per cent apart) and
@@ -58,7 +89,19 @@ _LINES = ({"linestyle": "-", "linewidth": 2.2}, {"linestyle": "--", "linewidth":
 def loss_curves(runs: dict[str, Path], path) -> Path:
     """Objective (and data misfit, where logged) against epoch for each run, log scale; the
     runs' curves are drawn solid, dashed and dotted in turn, so that curves that coincide all
-    show."""
+    show.
+
+    The misfit axis names the quantity logged (:data:`MISFIT_LABELS`): the dimensionless
+    noise-weighted χ² for noise-weighted runs, ‖F(θ) − d‖² in (W/(m²·sr·cm⁻¹))² otherwise;
+    runs of both kinds each say theirs in the misfit panel's legend.
+
+    Parameters
+    ----------
+    runs : dict of str to Path
+        Label → run folder (``history.csv``, ``summary.json``).
+    path : str or os.PathLike
+        The PNG to write.
+    """
     series = loss_series(runs)
     line = {label: _LINES[i % len(_LINES)] for i, label in enumerate(series)}
     with_misfit = {label: s for label, s in series.items() if s["misfit"] is not None}
@@ -69,12 +112,16 @@ def loss_curves(runs: dict[str, Path], path) -> Path:
         axes[0].semilogy(s["epoch"], s["loss"], label=label, **line[label])
     axes[0].set(ylabel="loss", title="objective")
     if with_misfit:
+        kinds = list(dict.fromkeys(s["noise_weighted"] for s in with_misfit.values()))
         for label, s in with_misfit.items():
-            axes[1].semilogy(s["epoch"], s["misfit"], label=label, **line[label])
+            named = label if len(kinds) == 1 else f"{label}: {MISFIT_LABELS[s['noise_weighted']]}"
+            axes[1].semilogy(s["epoch"], s["misfit"], label=named, **line[label])
         unlogged = sorted(set(series) - set(with_misfit))
-        axes[1].set(ylabel="‖F(θ) − d‖² [(W/(m²·sr·cm⁻¹))²]",
+        axes[1].set(ylabel=MISFIT_LABELS[kinds[0]] if len(kinds) == 1 else "data misfit",
                     title="data misfit" + (f" (not logged by {', '.join(unlogged)})"
                                            if unlogged else ""))
+        if len(kinds) > 1:
+            axes[1].legend(fontsize=7)
     for ax in axes:
         ax.set_xlabel("epoch (one pass over all rays)")
         ax.grid(True, which="both", alpha=0.3)
@@ -85,31 +132,45 @@ def loss_curves(runs: dict[str, Path], path) -> Path:
     return Path(path)
 
 
-def spectrum_and_image(folder, path, n_cameras: int = 4, label: str = "reconstruction") -> Path:
-    """Measured vs simulated spectrum of the brightest pixel, and camera 1's band image, of the
-    run in ``folder``, whose reconstruction the figure names ``label``."""
+def run_rig(folder) -> CameraRig:
+    """The cameras of the run in ``folder``, chosen from its ``config.toml`` as the run chose
+    them (:func:`invflame.experiments.inputs.scene_rig`).
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        A run folder (:func:`invflame.experiments.runner.run_experiment`).
+
+    Raises
+    ------
+    FileNotFoundError
+        If the folder holds no ``config.toml``.
+    """
+    cfg = configuration.load(Path(folder) / "config.toml")
+    return scene_rig(cfg, read_data(cfg))
+
+
+def spectrum_and_image(folder, path, rig: CameraRig | None = None,
+                       label: str = "reconstruction") -> Path:
+    """Measured against simulated spectrum of the brightest pixel, and every camera's band
+    image, of the run in ``folder`` (its ``data.npz``), whose reconstruction the figure names
+    ``label`` (:func:`invflame.plotting.spectra.plot_spectrum_and_images`).
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        A run folder.
+    path : str or os.PathLike
+        The PNG to write.
+    rig : CameraRig, optional
+        The run's cameras, each with its own pixel counts; default: :func:`run_rig`.
+    label : str, optional
+        Name of the run's reconstruction.
+    """
     data = np.load(Path(folder) / "data.npz")
-    measured, simulated, eta = data["measured"], data["simulated"], data["out_wavenumber"]
-    n_pixels = int(round(np.sqrt(measured.shape[0] / n_cameras)))
-    pixel = int(np.argmax(measured.sum(axis=1)))
-    band = measured.sum(axis=1) * (eta[1] - eta[0])
-    band_sim = simulated.sum(axis=1) * (eta[1] - eta[0])
-    image = band.reshape(n_cameras, n_pixels, n_pixels)[0]
-    image_sim = band_sim.reshape(n_cameras, n_pixels, n_pixels)[0]
-    fig, axes = plt.subplots(1, 3, figsize=(14, 4))
-    axes[0].plot(eta, measured[pixel], "k.-", label="measured")
-    axes[0].plot(eta, simulated[pixel], "r-", label=f"simulated from {label}")
-    axes[0].set(xlabel="wavenumber [cm⁻¹]", ylabel="radiance [W/(m²·sr·cm⁻¹)]",
-                title=f"brightest pixel (ray {pixel})")
-    axes[0].legend(fontsize=8)
-    vmax = max(image.max(), image_sim.max())
-    for ax, img, title in ((axes[1], image, "measured"),
-                           (axes[2], image_sim, f"simulated from {label}")):
-        shown = ax.imshow(img, cmap="inferno", vmin=0, vmax=vmax)
-        ax.set(title=f"camera 1, {title}", xticks=[], yticks=[])
-    fig.colorbar(shown, ax=axes[1:], label="band radiance [W/(m²·sr)]")
-    fig.savefig(path, dpi=130, bbox_inches="tight")
-    plt.close(fig)
+    rig = run_rig(folder) if rig is None else rig
+    plt.close(plot_spectrum_and_images(data["out_wavenumber"], data["measured"],
+                                       data["simulated"], rig, label, path))
     return Path(path)
 
 

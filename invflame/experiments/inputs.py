@@ -7,7 +7,7 @@ from pathlib import Path
 
 from invflame.experiments import config as configuration
 from invflame.field import Field
-from invflame.geometry import VoxelGrid
+from invflame.geometry import CameraRig, VoxelGrid, paper_rig
 from invflame.measurement_file import MeasurementFile, read_measurement
 from invflame.phantoms import make_phantom
 from invflame.phantoms.plume import plume_soot
@@ -44,6 +44,28 @@ def read_data(cfg: dict) -> MeasurementFile | None:
     spec = configuration.rig_spec(cfg)
     where = f"the rig file {cfg['rig']['file']}" if cfg["rig"]["file"] else "rig.cameras"
     return read_measurement(source, rig=None if spec is None else spec.rig, rig_source=where)
+
+
+def scene_rig(cfg: dict, measured: MeasurementFile | None = None) -> CameraRig:
+    """The cameras of a run: ``rig.file`` or ``rig.cameras``, else the cameras of the
+    measurement file ``measured``, else the paper's rig (``rig.pixels``, ``rig.distance`` in m,
+    ``rig.focal_length`` in m) around the reconstruction grid.
+
+    Parameters
+    ----------
+    cfg : dict
+        Validated configuration.
+    measured : MeasurementFile, optional
+        The run's measured data (:func:`read_data`).
+    """
+    spec = configuration.rig_spec(cfg)
+    if spec is not None:
+        return spec.rig
+    if measured is not None:
+        return measured.rig
+    rig = cfg["rig"]
+    return paper_rig(configuration.reconstruction_grid(cfg), distance=rig["distance"],
+                     n_pixels=rig["pixels"], focal_length=rig["focal_length"])
 
 
 def load_truth(cfg: dict, grid: VoxelGrid | None = None) -> Field | None:

@@ -14,9 +14,12 @@ import solvers
 from invflame.atomic_files import read_json
 from invflame.experiments import config as configuration
 from invflame.experiments.measurement import Measurement
+from invflame.experiments.run_folder import FINGERPRINT
 from invflame.field import Field
 
-FINGERPRINT = "fingerprint.json"
+__all__ = ["FINGERPRINT", "FORCE_HINT", "check_fingerprint", "check_resumable",
+           "run_fingerprint"]
+
 FORCE_HINT = "; --force (invflame run --resume --force) continues anyway and records it"
 
 
@@ -63,7 +66,6 @@ def check_resumable(cfg: dict, folder, force: bool = False) -> list[str]:
                if not d.startswith("solver.iterations:")]
     return _refuse_unless_forced(folder, changed, force, "it was run with another configuration",
                                  "the same configuration")
-
 
 
 def _content_hash(*arrays) -> str:
@@ -148,5 +150,5 @@ def _refuse_unless_forced(folder, changed: list[str], force: bool, why: str,
     if changed and not force:
         raise configuration.ConfigError(
             f"cannot resume {Path(folder)}: {why} (" + "; ".join(changed) + f"); resume with "
-            f"{same}, or start a new folder (or run without --resume to redo it){FORCE_HINT}")
+            f"{same}, or start a new folder (or redo it: invflame run --overwrite){FORCE_HINT}")
     return changed

@@ -3,10 +3,14 @@ r"""One reconstruction from a configuration: scene, data, representation, solver
 :func:`run_experiment` writes into its output folder
 
 ====================== ======================================================================
-``config.toml``        the complete configuration (defaults filled in) with its seed
+``config.toml``        the complete configuration (defaults filled in) with its seed; with
+                       ``data.source``, a comment on top gives the measurement file's
+                       instrument, which the run uses in place of ``[instrument]``
 ``summary.json``       metrics (normalized MSE and PSNR per field, time per iteration, memory)
                        and the machine that computed them
-                       (:func:`~invflame.experiments.machine.describe_machine`)
+                       (:func:`~invflame.experiments.machine.describe_machine`); with
+                       ``data.source``, ``measured_instrument``: the file's resolution,
+                       apodization and wavenumbers, used in place of ``[instrument]``
 ``history.csv``        per-iteration loss, data misfit, regularizer, gradient norm, wall time
 ``truth.npz``          ground truth on the reconstruction grid (:class:`invflame.field.Field`)
 ``initial.npz``        starting fields (for a neural field: the pretrained network's)
@@ -55,7 +59,7 @@ import solvers
 from invflame.atomic_files import read_json, write_csv, write_json, write_npz, write_text
 from invflame.background import background_from_config
 from invflame.experiments import config as configuration
-from invflame.experiments.inputs import absorption_table, load_truth, read_data
+from invflame.experiments.inputs import absorption_table, load_truth, read_data, scene_rig
 from invflame.experiments.machine import describe_machine, in_words
 from invflame.experiments.measurement import (
     Measurement,
@@ -78,10 +82,15 @@ from invflame.experiments.resume import (
 )
 from invflame.experiments.run_folder import RunLock
 from invflame.experiments.start import initial_fields
-from invflame.experiments.summaries import chi2_per_value, protocol, truth_scores
+from invflame.experiments.summaries import (
+    chi2_per_value,
+    misfit_name,
+    protocol,
+    truth_scores,
+)
 from invflame.export import export_run
 from invflame.field import Field
-from invflame.geometry import VoxelGrid, paper_rig, ray_coverage
+from invflame.geometry import VoxelGrid, ray_coverage
 from invflame.geometry.rig_file import check_instrument
 from invflame.measurement_file import MeasurementFile
 from invflame.scene import Scene
@@ -137,13 +146,7 @@ def build_scene(cfg: dict, table: AbsorptionTable | None = None,
     """
     grid = configuration.reconstruction_grid(cfg)
     spec = configuration.rig_spec(cfg)
-    if spec is not None:
-        rig = spec.rig
-    elif measured is not None:
-        rig = measured.rig
-    else:
-        rig = paper_rig(grid, distance=cfg["rig"]["distance"], n_pixels=cfg["rig"]["pixels"],
-                        focal_length=cfg["rig"]["focal_length"])
+    rig = scene_rig(cfg, measured)
     table = absorption_table(cfg) if table is None else table
     if measured is None:
         resolution = cfg["instrument"]["resolution"]
@@ -272,7 +275,9 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
                       out / FINGERPRINT):
             stale.unlink(missing_ok=True)
     log = Log(out / "log.txt", echo=progress)
-    write_text(out / "config.toml", configuration.dumps(cfg))
+    source = cfg["data"]["source"]
+    write_text(out / "config.toml", configuration.dumps(cfg) if measured is None
+               else measured.instrument_comment(source) + configuration.dumps(cfg))
     log(f"scene: grid {scene.grid.shape}, {scene.n_rays} pixels x {scene.rays_per_pixel} "
         f"sub-rays, {scene.wavenumber.size} line-by-line points -> "
         f"{scene.out_wavenumber.size} output points; truth {cfg['truth']['source']}")
@@ -348,6 +353,7 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
     seconds = float(np.diff(times).mean()) if times.size > 1 else None
     summary = {
         "config": cfg,
+        "measured_instrument": None if measured is None else measured.instrument(source),
         "protocol": described,
         "resumed": resumed,
         "lambda": reg["lambda"],
@@ -359,6 +365,8 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
         "loss": {"initial": history["loss"][0], "final": result.loss},
         "chi2_per_measurement": {"initial": chi2_per_value(scene.simulate(start), measurement),
                                  "final": chi2_per_value(simulated, measurement)},
+        "noisy_data": measurement.noisy,
+        "noise_weighted_misfit": sigma is not None and measurement.noisy,
         **({} if truth is None else truth_scores(truth.values, fields, start)),
         "seconds_per_iteration": seconds,
         "seconds_per_epoch": None if seconds is None else seconds * per_epoch,
@@ -370,7 +378,8 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
     export_run(out)
     scored = (f"MSE {summary['mse']} (start {summary['mse_initial']}); " if truth is not None
               else "no ground truth; ")
-    log(f"{scored}chi2/M {summary['chi2_per_measurement']['final']:.3g}; "
+    log(f"{scored}{misfit_name(measurement.noisy)} "
+        f"{summary['chi2_per_measurement']['final']:.3g}; "
         f"{result.iterations} iterations, "
         f"{'converged' if summary['converged'] else 'not converged'}")
     return summary

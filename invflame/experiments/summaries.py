@@ -31,7 +31,9 @@ def protocol(cfg: dict, measurement: Measurement) -> dict[str, str]:
                 f"{record['rays_per_pixel']} sub-rays/pixel, line-by-line step "
                 f"{record['step_cm-1']:g} cm-1")
     noise = cfg["noise"]
-    if not measurement.noisy:
+    if not measurement.noisy and data["source"]:
+        said = "unknown (the file holds no noise): the misfit is unweighted"
+    elif not measurement.noisy:
         said = "none (noise-free data)"
     elif data["source"]:
         sigma = measurement.sigma[np.isfinite(measurement.sigma)]
@@ -61,6 +63,12 @@ def forward_model(spectrum: dict) -> str:
               "saturate inside it" if points > 1 else
               f"one optical depth per {spectrum['step']:g} cm-1 bin")
     return f"{broadening[spectrum['broadening']]}; {inside}"
+
+
+def misfit_name(noisy: bool) -> str:
+    """What :func:`chi2_per_value` is, in the words of the logs: χ²/M for data with a noise σ,
+    the mean square misfit with its units for data without."""
+    return "chi2/M" if noisy else "mean square misfit [(W/(m2 sr cm-1))^2]"
 
 
 def chi2_per_value(simulated: np.ndarray, measurement: Measurement) -> float:

@@ -56,9 +56,12 @@ def read_case(case, time) -> Field:
 
     Raises
     ------
-    FileNotFoundError, FoamFormatError, ValueError
-        Missing case, time, species list, field or mesh; a file that cannot be parsed or a
-        field not scalar or of the wrong length; a mesh that is not a uniform box grid.
+    FileNotFoundError
+        Missing case, time, species list, field or mesh file.
+    FoamFormatError
+        A file that cannot be parsed (cut short, or its counts or labels wrong); a field not
+        scalar or of the wrong length; a species without molar mass; a mesh that is not a
+        uniform box grid (naming the mesh folder).
     """
     case = Path(case)
     tdir = time_directory(case, time)
@@ -68,7 +71,10 @@ def read_case(case, time) -> Field:
     centres = cell_centres(case)
     n = len(centres)
     mole = mass_to_mole_fractions({s: read_internal_field(tdir / s, n) for s in masses}, masses)
-    grid, flat = grid_from_centres(centres, _up_axis(case), mesh_box(case))
+    try:
+        grid, flat = grid_from_centres(centres, _up_axis(case), mesh_box(case))
+    except ValueError as err:
+        raise FoamFormatError(f"{case / 'constant' / 'polyMesh'}: {err}") from err
     cells = {"T": read_internal_field(tdir / "T", n), **mole}
     values = np.zeros((len(FIELD_NAMES), grid.n_voxels))
     values[:, flat] = [cells.get(name, np.zeros(n)) for name in FIELD_NAMES]
@@ -103,8 +109,8 @@ def _molar_masses(case: Path) -> dict[str, float]:
         found = [w for p in thermo if (w := read_foam(p, s, "specie", "molWeight")) is not None]
         masses[s] = float(next(iter(found), MOLAR_MASS.get(s, np.nan)))
         if np.isnan(masses[s]):
-            raise KeyError(f"no molWeight for species {s!r} in {constant}/thermo* and none "
-                           "tabulated; add it to the case's thermo dictionary")
+            raise FoamFormatError(f"no molWeight for species {s!r} in {constant}/thermo* and "
+                                  "none tabulated; add it to the case's thermo dictionary")
     return masses
 
 

@@ -7,24 +7,36 @@ from pathlib import Path
 import numpy as np
 
 from invflame.geometry import VoxelGrid
-from invflame.openfoam.foamfile import read_foam
+from invflame.openfoam.foamfile import FoamFormatError, read_foam, read_labels
 
 
 def cell_centres(case) -> np.ndarray:
     """Cell centres in m, shape ``(n_cells, 3)``, of the mesh in ``case/constant/polyMesh``.
 
     Each is the mean of its cell's face centres (a face centre: the mean of its points), which
-    is the centroid of the cuboid cells :func:`grid_from_centres` accepts.
+    is the centroid of the cuboid cells :func:`grid_from_centres` accepts. Binary meshes may
+    have 32- or 64-bit labels (:func:`~invflame.openfoam.foamfile.read_labels`).
+
+    Raises
+    ------
+    FileNotFoundError
+        If a mesh file is missing.
+    FoamFormatError
+        If a mesh file cannot be parsed, or its faces, owners and neighbours do not fit
+        together (naming the file or the mesh folder).
     """
     mesh = Path(case) / "constant" / "polyMesh"
     points = np.asarray(read_foam(mesh / "points"), dtype=np.float64)
-    faces = read_foam(mesh / "faces")
-    if isinstance(faces, tuple):  # faceCompactList: (offsets, labels)
-        offsets, labels = faces
-    else:  # faceList: one label array per face
-        offsets, labels = np.cumsum([0] + [len(f) for f in faces]), np.concatenate(faces)
+    offsets, labels = read_labels(mesh / "faces")
+    owner, neighbour = read_labels(mesh / "owner"), read_labels(mesh / "neighbour")
+    if labels.size and labels.max() >= len(points):
+        raise FoamFormatError(f"{mesh / 'faces'}: point label {labels.max()} in a mesh of "
+                              f"{len(points)} points; check the 'arch' entry's label size")
+    if len(owner) != len(offsets) - 1 or len(neighbour) > len(owner):
+        raise FoamFormatError(f"{mesh}: {len(offsets) - 1} faces, {len(owner)} owners and "
+                              f"{len(neighbour)} neighbours do not form a mesh (one owner per "
+                              "face, a neighbour per internal face)")
     centres = np.add.reduceat(points[labels], offsets[:-1]) / np.diff(offsets)[:, None]
-    owner, neighbour = read_foam(mesh / "owner"), read_foam(mesh / "neighbour")
     cells = np.concatenate([owner, neighbour])
     centres = np.concatenate([centres, centres[: len(neighbour)]])
     sums = [np.bincount(cells, weights=centres[:, a]) for a in range(3)]

@@ -15,7 +15,7 @@ from matplotlib.ticker import MaxNLocator  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 from skimage.measure import marching_cubes  # noqa: E402
 
-from invflame.field import Field, hot_extent  # noqa: E402
+from invflame.field import Field  # noqa: E402
 from invflame.plotting.fields import AXIS_NAMES, ISOTHERMS  # noqa: E402
 
 _TITLE_INCHES = 0.5  # room above each panel for a title of up to three lines
@@ -68,37 +68,6 @@ def isotherm_surface(field: Field, level: float, step: int = 1,
     return triangles
 
 
-def shown_box(fields, threshold: float, margin: int = 2) -> tuple[np.ndarray, np.ndarray]:
-    """The box the 3-D panels show: every voxel hotter than ``threshold`` (K) in any of the
-    fields, widened by ``margin`` voxels and kept inside the grid, in m. A field hot anywhere
-    (a flame spread over the domain) widens it to the whole box.
-
-    Parameters
-    ----------
-    fields : iterable of Field
-        Fields on one grid.
-    threshold : float
-        Temperature in K (the lowest isotherm).
-    margin : int, optional
-        Voxels added on every side.
-
-    Returns
-    -------
-    (lower, upper) : numpy.ndarray, shape (3,), in m
-        The grid's box when no voxel is that hot.
-    """
-    fields = list(fields)
-    grid = fields[0].grid
-    extents = [hot_extent(f, threshold) for f in fields]
-    extents = [(lo, hi) for lo, hi in extents if lo is not None]
-    if not extents:
-        return grid.lower, grid.upper
-    widen = (margin + 0.5) * grid.spacing  # from voxel centres to their faces, and the margin
-    lower = np.min([lo for lo, _ in extents], axis=0) - widen
-    upper = np.max([hi for _, hi in extents], axis=0) + widen
-    return np.maximum(lower, grid.lower), np.minimum(upper, grid.upper)
-
-
 def plot_isotherms_3d(fields: Mapping[str, Field], path=None,
                       levels: Sequence[float] = ISOTHERMS,
                       scores: Mapping[str, float] | None = None, columns: int = 4,
@@ -108,14 +77,14 @@ def plot_isotherms_3d(fields: Mapping[str, Field], path=None,
 
     Each panel draws the surfaces ``T = level`` (default every 100 K from 500 to 1500 K), one
     colour per level, with the quarter of the box facing the viewer cut away; the vertical axis
-    of the grid points up. All panels share the view and the colour of each level; each shows
-    the box (:func:`shown_box`) where the first field (the truth) or its own field is above
-    the lowest level, so a reconstruction that is hot elsewhere shows it, with its axes.
+    of the grid points up. All panels share the view, the colour of each level and the axes:
+    each shows the whole grid box at equal scales, so the shapes compare panel to panel.
 
     Parameters
     ----------
     fields : mapping of str to Field
-        Panel label → fields (e.g. the ground truth, then each method), in display order.
+        Panel label → fields on one grid (e.g. the ground truth, then each method), in display
+        order.
     path : str or os.PathLike, optional
         Write a PNG there (parent folders created).
     levels : sequence of float, optional
@@ -138,6 +107,11 @@ def plot_isotherms_3d(fields: Mapping[str, Field], path=None,
     """
     if not fields:
         raise ValueError("plot_isotherms_3d needs at least one field set (label -> Field)")
+    grid = next(iter(fields.values())).grid
+    elsewhere = [label for label, field in fields.items() if field.grid != grid]
+    if elsewhere:
+        raise ValueError(f"field sets {elsewhere} lie on another grid than the first; resample "
+                         "them onto one grid (Field.resample) so the panels share their axes")
     levels = [float(t) for t in levels]
     if len(levels) < 2 or np.any(np.diff(levels) <= 0):
         raise ValueError(f"levels must be at least two increasing temperatures in K; got "
@@ -163,14 +137,11 @@ def plot_isotherms_3d(fields: Mapping[str, Field], path=None,
         hotter = (level - levels[0]) / (levels[-1] - levels[0])
         return (*cmap(norm(level))[:3], alpha[0] + (alpha[1] - alpha[0]) * hotter)
 
-    reference_label, reference = next(iter(fields.items()))
+    first, second = (a for a in range(3) if a != grid.up_axis)
+    order = [first, second, grid.up_axis]  # plot axes: horizontal, horizontal, up
+    step = max(1, int(np.ceil(max(grid.shape) / MAX_SAMPLES)))
     for i, (label, field) in enumerate(fields.items()):
         ax = fig.add_subplot(cells[i // n_cols, i % n_cols], projection="3d")
-        lower, upper = shown_box([reference, field], levels[0])
-        grid = field.grid
-        first, second = (a for a in range(3) if a != grid.up_axis)
-        order = [first, second, grid.up_axis]  # plot axes: horizontal, horizontal, up
-        step = max(1, int(np.ceil(max(grid.shape) / MAX_SAMPLES)))
         surfaces = [(isotherm_surface(field, level, step), level) for level in levels]
         triangles = np.concatenate([t for t, _ in surfaces])
         if len(triangles):  # one collection: matplotlib sorts its faces by depth
@@ -179,8 +150,9 @@ def plot_isotherms_3d(fields: Mapping[str, Field], path=None,
             ax.add_collection3d(Poly3DCollection(
                 triangles[..., order], facecolors=colours, edgecolor="none", shade=True))
         for setter, a in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), order, strict=True):
-            setter(lower[a], upper[a])
-        ax.set_box_aspect([upper[a] - lower[a] for a in order], zoom=0.85)  # room for labels
+            setter(grid.lower[a], grid.upper[a])
+        ax.set_box_aspect([grid.upper[a] - grid.lower[a] for a in order],
+                          zoom=0.85)  # room for labels
         ax.set_xlabel(f"{AXIS_NAMES[first]} [m]", fontsize=7, labelpad=-6)
         ax.set_ylabel(f"{AXIS_NAMES[second]} [m]", fontsize=7, labelpad=-6)
         ax.set_zlabel(f"{AXIS_NAMES[grid.up_axis]} [m]", fontsize=7, labelpad=-6)
@@ -192,8 +164,7 @@ def plot_isotherms_3d(fields: Mapping[str, Field], path=None,
     bar_axes = fig.add_axes((0.2, 0.6 * _BAR_INCHES / height, 0.6, 0.2 * _BAR_INCHES / height))
     bar = fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cmap), cax=bar_axes,
                        orientation="horizontal", ticks=levels)
-    bar.set_label("isotherm T [K]; a quarter of each box cut away; each box: where the "
-                  f"{reference_label} or the panel's field is above {levels[0]:.0f} K",
+    bar.set_label("isotherm T [K]; every panel shows the whole grid, a quarter of it cut away",
                   fontsize=8)
     bar.ax.tick_params(labelsize=7)
     if path is not None:

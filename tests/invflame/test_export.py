@@ -1,6 +1,7 @@
 """Field sets as VTK image data and NetCDF: read back value by value, names, units, grid."""
 
 import argparse
+import datetime
 import json
 import xml.etree.ElementTree as ET
 
@@ -8,7 +9,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from invflame import __version__
 from invflame.cli import export as export_cli
+from invflame.cli import main
 from invflame.export import (
     FIELD_SETS,
     array_name,
@@ -140,6 +143,8 @@ def test_netcdf_reads_in_vtk_with_x_y_z_where_they_belong(tmp_path):
 
     field = sample_field(7)
     reader = netcdf.vtkNetCDFCFReader()  # ParaView's "NetCDF CF Reader"
+    # it takes the CF axes X and Y for longitude and latitude unless told they are Cartesian
+    reader.SphericalCoordinatesOff()
     reader.SetFileName(str(write_netcdf({"truth": field}, tmp_path / "f.nc")))
     reader.UpdateMetaData()
     reader.SetVariableArrayStatus("truth_T", 1)
@@ -202,6 +207,28 @@ def test_a_run_without_truth_exports_start_and_reconstruction(tmp_path):
         export_run(tmp_path / "run", ["vtk"])
 
 
+def test_netcdf_is_read_by_its_cf_conventions(tmp_path):
+    pytest.importorskip("cf_xarray", reason="cf_xarray is not installed")
+    import netCDF4
+
+    before = datetime.datetime.now(datetime.UTC).replace(microsecond=0)
+    write_run(tmp_path / "run")
+    (path,) = export_run(tmp_path / "run", ["netcdf"])
+    with xr.open_dataset(path) as ds:
+        assert ds.cf.axes == {"X": ["x"], "Y": ["y"], "Z": ["z"]}
+        for axis in "XYZ":
+            assert ds.cf.get_bounds(axis).name == f"{axis.lower()}_bounds"
+        assert "coordinates" not in ds.attrs
+        written, by = ds.attrs["history"].split(": ", 1)
+        assert before <= datetime.datetime.fromisoformat(written) <= datetime.datetime.now(
+            datetime.UTC)
+        assert by == f"written by invflame {__version__} (invflame.export)"
+    with netCDF4.Dataset(path) as raw:  # the attributes as stored, before xarray decodes them
+        assert "coordinates" not in raw.ncattrs()
+        for name, variable in raw.variables.items():
+            assert "_FillValue" not in variable.ncattrs(), name
+
+
 def parse(argv):
     parser = argparse.ArgumentParser()
     export_cli.add_parser(parser.add_subparsers())
@@ -223,13 +250,13 @@ def test_cli_exports_a_run_or_every_run_of_a_comparison(tmp_path, capsys):
     assert capsys.readouterr().out.count("wrote") == 3 + 8
 
 
-def test_cli_names_a_folder_without_results(tmp_path):
+def test_cli_names_a_folder_without_results(tmp_path, capsys):
     (tmp_path / "empty").mkdir()
-    args = parse(["export", str(tmp_path / "empty")])
-    with pytest.raises(SystemExit, match="holds no reconstruction.npz, nor do its sub-folders"):
-        args.func(args)
-    args = parse(["export", str(tmp_path / "missing")])
-    with pytest.raises(SystemExit, match="is not a folder"):
-        args.func(args)
+    for folder, message in (("empty", "holds no reconstruction.npz, nor do its sub-folders"),
+                            ("missing", "is not a folder")):
+        assert main(["export", str(tmp_path / folder)]) == 2
+        error = capsys.readouterr().err.strip()
+        assert error.startswith("invflame export: error:") and message in error
+        assert len(error.splitlines()) == 1
     with pytest.raises(FileNotFoundError, match="holds no reconstruction.npz"):
         read_run_fields(tmp_path / "empty")

@@ -6,8 +6,15 @@ import matplotlib.colors
 import matplotlib.image
 import numpy as np
 
-from invflame.experiments import figures
-from invflame.experiments.figures import field_figures, loss_curves, loss_series, run_fields
+from invflame.experiments import config, figures
+from invflame.experiments.figures import (
+    MISFIT_LABELS,
+    field_figures,
+    loss_curves,
+    loss_series,
+    run_fields,
+)
+from invflame.geometry import VoxelGrid, paper_rig
 
 
 def test_field_figures_of_run_folders(tmp_path, plume_fields):
@@ -29,13 +36,13 @@ def test_field_figures_of_run_folders(tmp_path, plume_fields):
     assert rows["cutaways.png"][0] > rows["errors.png"][0]
 
 
-def _history(folder, iterations, misfit, epochs):
+def _history(folder, iterations, misfit, epochs, summary=None):
     folder.mkdir()
     rows = ["iteration,loss,misfit,regularizer,grad_norm,time"]
     rows += [f"{i},{10.0 / (i + 1)},{misfit},nan,1.0,{0.5 * i}" for i in range(iterations + 1)]
     (folder / "history.csv").write_text("\n".join(rows) + "\n")
     (folder / "summary.json").write_text(json.dumps({"iterations": iterations,
-                                                      "epochs": epochs}))
+                                                      "epochs": epochs, **(summary or {})}))
 
 
 def test_loss_series_in_epochs_and_misfit_only_where_logged(tmp_path):
@@ -78,10 +85,42 @@ def test_the_spectrum_figure_names_the_run_it_shows(tmp_path, monkeypatch):
              out_wavenumber=np.linspace(660.0, 700.0, 5))
     shown = []
     monkeypatch.setattr(figures.plt, "close", shown.append)
-    figures.spectrum_and_image(tmp_path, tmp_path / "spectrum.png", label="VG/TV")
+    rig = paper_rig(VoxelGrid.poolfire(4), n_pixels=3)
+    figures.spectrum_and_image(tmp_path, tmp_path / "spectrum.png", rig, label="VG/TV")
     (fig,) = shown
-    spectrum, _, simulated = fig.axes[:3]
+    spectrum, _, _, _, _, simulated = fig.axes[:6]
     assert [t.get_text() for t in spectrum.get_legend().get_texts()] == [
         "measured", "simulated from VG/TV"]
-    assert simulated.get_title() == "camera 1, simulated from VG/TV"
-    assert spectrum.get_title() == f"brightest pixel (ray {int(np.argmax(measured.sum(1)))})"
+    assert simulated.get_title() == "camera 1 (3×3 px)\nsimulated from VG/TV"
+    ray = int(np.argmax(measured.sum(1)))
+    camera, pixel = divmod(ray, 9)
+    assert spectrum.get_title() == (f"brightest pixel: camera {camera + 1}, row {pixel // 3 + 1}, "
+                                    f"column {pixel % 3 + 1} (ray {ray})")
+
+
+def test_loss_curves_name_the_misfit_of_each_weighting(tmp_path, monkeypatch):
+    def run(name, scaling, noise="nesr"):
+        cfg = config.validate({"regularizer": {"scaling": scaling}, "noise": {"kind": noise}})
+        _history(tmp_path / name, 4, 0.5, 4.0, {"config": cfg})
+        return tmp_path / name
+
+    chi2, paper, clean = run("chi2", "chi2"), run("paper", "paper"), run("clean", "chi2", "none")
+    _history(tmp_path / "unknown", 4, 0.5, 4.0)
+    # a measurement file without noise: only the summary's record tells
+    measured = config.validate({})
+    measured["data"]["source"] = "data.nc"
+    _history(tmp_path / "measured", 4, 0.5, 4.0, {"config": measured,
+                                                  "noise_weighted_misfit": False})
+    shown = []
+    monkeypatch.setattr(figures.plt, "close", shown.append)
+    for runs in ({"VG": chi2}, {"VG": paper}, {"VG": clean}, {"VG": tmp_path / "unknown"},
+                 {"VG": tmp_path / "measured"}, {"VG": chi2, "NN": paper}):
+        loss_curves(runs, tmp_path / "loss.png")
+    labels = [fig.axes[1].get_ylabel() for fig in shown]
+    assert labels == [MISFIT_LABELS[True], MISFIT_LABELS[False], MISFIT_LABELS[False],
+                      MISFIT_LABELS[None], MISFIT_LABELS[False], "data misfit"]
+    assert MISFIT_LABELS[True] == "noise-weighted χ² = ‖(F(θ) − d)/σ‖² [1]"
+    assert "(W/(m²·sr·cm⁻¹))²" in MISFIT_LABELS[False]
+    # runs of both kinds: each curve says its quantity
+    assert [t.get_text() for t in shown[-1].axes[1].get_legend().get_texts()] == [
+        f"VG: {MISFIT_LABELS[True]}", f"NN: {MISFIT_LABELS[False]}"]

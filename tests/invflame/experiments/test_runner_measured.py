@@ -197,3 +197,21 @@ def test_a_rig_stating_another_resolution_is_refused(simulated, monkeypatch):
     with pytest.raises(InputDataError, match="resolution 4 cm-1 but \\[instrument\\] and "
                                              "\\[spectrum\\] models 8 cm-1"):
         runner.build_scene(cfg)
+
+
+def test_a_file_without_noise_is_reported_as_an_unweighted_misfit(simulated, tmp_path,
+                                                                  monkeypatch):
+    folder, _, _ = simulated
+    measured = read_measurement(folder / "m.nc")
+    clean = Measurement(measured.measurement.data, np.ones_like(measured.measurement.data),
+                        noisy=False, provenance={})
+    write_measurement(MeasurementFile(clean, measured.rig, measured.wavenumber,
+                                      measured.resolution), tmp_path / "clean.nc")
+    monkeypatch.chdir(tmp_path)
+    cfg = config.validate({"truth": {"grid": 8}, "data": {"source": "clean.nc"},
+                           "spectrum": dict(SPECTRUM), "solver": dict(SOLVER)})
+    summary = runner.run_experiment(cfg, tmp_path / "run", progress=False)
+    assert summary["noisy_data"] is False and summary["noise_weighted_misfit"] is False
+    assert summary["protocol"]["noise"].startswith("unknown (the file holds no noise)")
+    log = (tmp_path / "run" / "log.txt").read_text()
+    assert "mean square misfit [(W/(m2 sr cm-1))^2]" in log and "chi2/M" not in log

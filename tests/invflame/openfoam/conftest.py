@@ -17,8 +17,8 @@ _BANNER = """/*--------------------------------*- C++ -*------------------------
 """
 
 
-def _header(cls: str, obj: str, fmt: str) -> bytes:
-    arch = '    arch        "LSB;label=32;scalar=64";\n' if fmt == "binary" else ""
+def _header(cls: str, obj: str, fmt: str, label_bits: int = 32) -> bytes:
+    arch = f'    arch        "LSB;label={label_bits};scalar=64";\n' if fmt == "binary" else ""
     return (
         f"{_BANNER}FoamFile\n{{\n    version     2.0;\n    format      {fmt};\n{arch}"
         f"    class       {cls};\n    object      {obj};\n}}\n"
@@ -26,11 +26,11 @@ def _header(cls: str, obj: str, fmt: str) -> bytes:
     ).encode()
 
 
-def _list(values: np.ndarray, fmt: str, kind: str) -> bytes:
+def _list(values: np.ndarray, fmt: str, kind: str, label_bits: int = 32) -> bytes:
     values = np.asarray(values)
     n = len(values)
     if fmt == "binary":
-        dtype = "<i4" if kind == "label" else "<f8"
+        dtype = f"<i{label_bits // 8}" if kind == "label" else "<f8"
         return f"{n}\n(".encode() + values.astype(dtype).tobytes() + b")\n"
     if values.ndim == 1:
         body = "\n".join(repr(v.item()) for v in values)
@@ -93,12 +93,13 @@ def write_case(
     compress: bool = False,
     with_centres: bool = False,
     time: str = "0.5",
+    label_bits: int = 32,
 ) -> dict:
     """Write a case; return the expected per-cell T and mass fractions (C order over ix, iy, iz).
 
     ``edges``: cell edges per axis (default a 3×4×2 box over x ∈ [−0.3, 0.3], y ∈ [0, 1],
     z ∈ [−0.1, 0.1]). T = 300 + 1000 y + 10 x; CO2 and H2O grow with T, CH4 with x, O2
-    uniform, N2 the rest.
+    uniform, N2 the rest. ``label_bits``: the size of a binary mesh's labels (32 or 64).
     """
     if edges is None:
         edges = (np.linspace(-0.3, 0.3, 4), np.linspace(0.0, 1.0, 5), np.linspace(-0.1, 0.1, 3))
@@ -107,18 +108,19 @@ def write_case(
     mesh = root / "constant" / "polyMesh"
     _write(mesh / "points", _header("vectorField", "points", fmt) + _list(pts, fmt, "v"),
            compress)
+    bits = {"label_bits": label_bits}
     if fmt == "binary":
         offsets = np.concatenate([[0], np.cumsum([len(f) for f in faces])])
-        body = _list(offsets, fmt, "label") + _list(np.concatenate(faces), fmt, "label")
-        _write(mesh / "faces", _header("faceCompactList", "faces", fmt) + body, compress)
+        body = (_list(offsets, fmt, "label", **bits)
+                + _list(np.concatenate(faces), fmt, "label", **bits))
+        _write(mesh / "faces", _header("faceCompactList", "faces", fmt, **bits) + body, compress)
     else:
         body = f"{len(faces)}\n(\n" + "\n".join(
             f"{len(f)}(" + " ".join(map(str, f)) + ")" for f in faces) + "\n)\n"
         _write(mesh / "faces", _header("faceList", "faces", fmt) + body.encode(), compress)
-    _write(mesh / "owner", _header("labelList", "owner", fmt) + _list(owner, fmt, "label"),
-           compress)
-    _write(mesh / "neighbour",
-           _header("labelList", "neighbour", fmt) + _list(neighbour, fmt, "label"), compress)
+    for name, labels in (("owner", owner), ("neighbour", neighbour)):
+        _write(mesh / name, _header("labelList", name, fmt, **bits)
+               + _list(labels, fmt, "label", **bits), compress)
 
     constant = root / "constant"
     (constant / "reactions").write_text(

@@ -127,5 +127,5 @@ def test_species_without_molar_mass_is_named(tiny_case):
     reactions = case / "constant" / "reactions"
     reactions.write_text(reactions.read_text().replace("N2", "XY9"))
     (case / "0.5" / "N2").rename(case / "0.5" / "XY9")
-    with pytest.raises(KeyError, match="no molWeight for species 'XY9'"):
+    with pytest.raises(FoamFormatError, match="no molWeight for species 'XY9'"):
         read_case(case, 0.5)

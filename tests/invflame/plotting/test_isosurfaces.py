@@ -1,4 +1,5 @@
-"""3-D isotherm figures at tiny size: the surfaces, the box shown, one panel per field set."""
+"""3-D isotherm figures at tiny size: the surfaces, the grid box on every panel, one panel per
+field set."""
 
 import matplotlib.image
 import matplotlib.pyplot as plt
@@ -7,7 +8,7 @@ import pytest
 
 from invflame.field import Field
 from invflame.geometry import VoxelGrid
-from invflame.plotting.isosurfaces import isotherm_surface, plot_isotherms_3d, shown_box
+from invflame.plotting.isosurfaces import isotherm_surface, plot_isotherms_3d
 
 
 def ramp(grid: VoxelGrid) -> Field:
@@ -41,19 +42,23 @@ def test_isotherm_surface_lies_on_the_level_and_the_cut_removes_a_quarter():
     assert len(isotherm_surface(Field(grid, values), 600.0, step=1, cut=False)) > 0
 
 
-def test_shown_box_covers_the_hot_voxels_with_a_margin():
-    grid = VoxelGrid.cube(10)
-    values = np.zeros((4, 10, 10, 10), dtype=np.float32)
-    values[0] = 300.0
-    values[0, 4:6, 2:5, 5] = 900.0
-    field = Field(grid, values)
-    lower, upper = shown_box([field], 500.0, margin=1)
-    np.testing.assert_allclose(lower, grid.lower + grid.spacing * [3, 1, 4])
-    np.testing.assert_allclose(upper, grid.lower + grid.spacing * [7, 6, 7])
-    cold = Field(grid, np.where(values > 0, 300.0, 0.0).astype(np.float32))
-    lower, upper = shown_box([cold], 500.0)
-    np.testing.assert_array_equal(lower, grid.lower)
-    np.testing.assert_array_equal(upper, grid.upper)
+def test_every_panel_shows_the_whole_grid_box():
+    grid = VoxelGrid((-0.5, 0.0, -0.5), (0.5, 1.0, 0.5), (11, 6, 8))
+    values = np.full((4, *grid.shape), 300.0, dtype=np.float32)
+    values[1:] = 0.0
+    corner = values.copy()
+    corner[0, :3, :2, :3] = 1200.0  # hot in one corner only
+    fig = plot_isotherms_3d({"truth": ramp(grid), "corner": Field(grid, corner),
+                             "cold": Field(grid, values)})
+    panels = [ax for ax in fig.axes if ax.name == "3d"]
+    order = (0, 2, 1)  # horizontal, horizontal, up (y)
+    for ax in panels:
+        limits = (ax.get_xlim(), ax.get_ylim(), ax.get_zlim())
+        for (low, high), a in zip(limits, order, strict=True):
+            assert (low, high) == pytest.approx((grid.lower[a], grid.upper[a]))
+    plt.close(fig)
+    with pytest.raises(ValueError, match=r"field sets \['coarse'\] lie on another grid"):
+        plot_isotherms_3d({"truth": ramp(grid), "coarse": ramp(VoxelGrid.cube(4))})
 
 
 def test_isotherms_3d_has_one_panel_per_field_set_and_a_level_colour_bar(tmp_path, plume_fields):
