@@ -15,7 +15,8 @@ from invflame.spectroscopy.absorption_table import AbsorptionTable, default_line
 from invflame.spectroscopy.table_inputs import BROADENING
 
 
-def absorption_table(cfg: dict, step: float | None = None) -> AbsorptionTable:
+def absorption_table(cfg: dict, step: float | None = None,
+                     progress: bool = True) -> AbsorptionTable:
     """The absorption table for the configuration's spectral window, line lists, self
     broadening and spectral points (cached on disk).
 
@@ -25,6 +26,8 @@ def absorption_table(cfg: dict, step: float | None = None) -> AbsorptionTable:
         Validated configuration.
     step : float, optional
         Line-by-line step in cm⁻¹ (default ``spectrum.step``).
+    progress : bool, optional
+        Show a progress bar while a table is built.
     """
     spectrum = cfg["spectrum"]
     wavenumber = configuration.line_by_line_grid(spectrum, step)
@@ -32,7 +35,7 @@ def absorption_table(cfg: dict, step: float | None = None) -> AbsorptionTable:
     return AbsorptionTable.cached(default_linelists(wavenumber, files), wavenumber=wavenumber,
                                   pressure=spectrum["pressure"],
                                   self_fraction=BROADENING[spectrum["broadening"]],
-                                  subdivision=spectrum["points_per_bin"])
+                                  subdivision=spectrum["points_per_bin"], progress=progress)
 
 
 def read_data(cfg: dict) -> MeasurementFile | None:

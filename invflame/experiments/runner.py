@@ -123,7 +123,7 @@ class Log:
         if self.echo:
             print(line, flush=True)
 def build_scene(cfg: dict, table: AbsorptionTable | None = None,
-                measured: MeasurementFile | None = None) -> Scene:
+                measured: MeasurementFile | None = None, progress: bool = True) -> Scene:
     """The reconstruction scene of a configuration: grid (``[grid]``,
     :func:`invflame.experiments.config.reconstruction_grid`), rig, sub-rays, table,
     instrument, background (``[background]``, :func:`invflame.background.background_from_config`)
@@ -138,6 +138,8 @@ def build_scene(cfg: dict, table: AbsorptionTable | None = None,
     measured : MeasurementFile, optional
         Measured data (:func:`read_data`): their wavenumbers (cm⁻¹) and resolution replace
         ``[instrument]``, and their cameras are the rig when the configuration names none.
+    progress : bool, optional
+        Show a progress bar while an absorption table is built.
 
     Raises
     ------
@@ -147,7 +149,7 @@ def build_scene(cfg: dict, table: AbsorptionTable | None = None,
     grid = configuration.reconstruction_grid(cfg)
     spec = configuration.rig_spec(cfg)
     rig = scene_rig(cfg, measured)
-    table = absorption_table(cfg) if table is None else table
+    table = absorption_table(cfg, progress=progress) if table is None else table
     if measured is None:
         resolution = cfg["instrument"]["resolution"]
         out_wavenumber = configuration.output_grid(cfg, table.wavenumber)
@@ -168,7 +170,7 @@ def build_scene(cfg: dict, table: AbsorptionTable | None = None,
                  soot_input=cfg["soot"]["reconstruct"])
 
 
-def measure(cfg: dict, scene: Scene, truth: Field) -> Measurement:
+def measure(cfg: dict, scene: Scene, truth: Field, progress: bool = True) -> Measurement:
     """Synthetic measured spectra of the truth (see :mod:`invflame.experiments.measurement`).
 
     Parameters
@@ -180,12 +182,14 @@ def measure(cfg: dict, scene: Scene, truth: Field) -> Measurement:
     truth : Field
         Ground truth on its native grid (:func:`load_truth`); its soot, if any, is seen in the
         data, whether or not the reconstruction models soot.
+    progress : bool, optional
+        Show a progress bar while the data's absorption table is built.
     """
     data = cfg["data"]
     if data["inverse_crime"]:
         synthesis, truth = scene, truth.resample(scene.grid)
     else:
-        table = absorption_table(cfg, cfg["spectrum"]["step"] / data["step_divisor"])
+        table = absorption_table(cfg, cfg["spectrum"]["step"] / data["step_divisor"], progress)
         synthesis = synthesis_scene(scene, truth, table, data["rays_per_pixel"]
                                     ).with_background(scene.background)
     synthesis = synthesis.with_soot(None, soot_input=truth.soot is not None)
@@ -261,9 +265,8 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
     solver = cfg["solver"]
     summary_path, checkpoint = out / "summary.json", out / "checkpoint.npz"
     changed = check_resumable(cfg, out, force) if resume else []
-    measured = read_data(cfg)
-    scene = build_scene(cfg, table, measured)
-    native = load_truth(cfg)
+    measured, native = read_data(cfg), load_truth(cfg)  # the files first: quick to refuse
+    scene = build_scene(cfg, table, measured, progress)
     truth = None if native is None else _on_grid(cfg, native, scene.grid)
     if resume and summary_path.is_file():
         # finished: simulated data follow from the configuration, truth and code checked here
@@ -282,7 +285,8 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
         f"sub-rays, {scene.wavenumber.size} line-by-line points -> "
         f"{scene.out_wavenumber.size} output points; truth {cfg['truth']['source']}")
     if measurement is None:
-        measurement = measure(cfg, scene, native) if measured is None else measured.measurement
+        measurement = (measure(cfg, scene, native, progress) if measured is None
+                       else measured.measurement)
     fingerprint = run_fingerprint(cfg, truth, measurement)
     if resume:
         changed += check_fingerprint(out, fingerprint, force)

@@ -43,6 +43,11 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
+def __dir__() -> list[str]:
+    """The package's names, the neural classes among them before they are imported."""
+    return sorted(set(globals()) | set(_NEURAL.values()))
+
+
 class _ByKind(Mapping):
     """Representation class by kind; the neural ones are imported when looked up."""
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from invflame.cli import main
-from invflame.experiments import config
+from invflame.experiments import config, runner
 from invflame.experiments.run_folder import INCOMPLETE, LOCK
 
 TINY = {
@@ -156,3 +156,11 @@ def test_plot_and_export_name_a_damaged_file(tmp_path, capsys, command, name, co
     assert err.startswith(f"invflame {command}: error: ")
     assert message.format(path=run / name) in err
     assert "invflame run --overwrite --out" in err or name == "summary.json"
+
+
+
+def test_a_quiet_run_builds_its_table_without_a_bar(tmp_path, capsys, monkeypatch):
+    monkeypatch.setenv("INVFLAME_CACHE", str(tmp_path / "cache"))  # built, not loaded
+    runner.build_scene(config.validate(TINY), progress=False)
+    assert capsys.readouterr().err == ""
+    assert [p.suffix for p in (tmp_path / "cache").iterdir()] == [".npz"]
