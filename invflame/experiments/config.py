@@ -437,7 +437,7 @@ def load(path) -> dict:
     if not path.is_file():
         raise FileNotFoundError(f"configuration file not found: {path}")
     try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+        raw = tomllib.loads(path.read_text(encoding="utf-8-sig"))  # a byte-order mark is no key
     except UnicodeDecodeError as err:
         raise ConfigError(f"{path}: not UTF-8 text ({err.reason} at byte {err.start}; a TOML "
                           "file must be UTF-8: save it again as UTF-8)") from err

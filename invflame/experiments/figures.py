@@ -176,7 +176,8 @@ def spectrum_and_image(folder, path, rig: CameraRig | None = None,
 
 def run_fields(runs: dict[str, Path]) -> tuple[Field, dict[str, Field]]:
     """The ground truth and the estimates to show for runs: the start (of the first run), then
-    each run's reconstruction, by label.
+    each run's reconstruction, by label; their gas alone (:attr:`~invflame.field.Field.gas`)
+    unless all hold a soot volume fraction (a sooting truth reconstructed without soot).
 
     Parameters
     ----------
@@ -189,7 +190,10 @@ def run_fields(runs: dict[str, Path]) -> tuple[Field, dict[str, Field]]:
         estimates["start"] = Field.load(first / "initial.npz")
     estimates.update({label: Field.load(Path(folder) / "reconstruction.npz")
                       for label, folder in runs.items()})
-    return Field.load(first / "truth.npz"), estimates
+    truth = Field.load(first / "truth.npz")
+    if any(field.soot is None for field in [truth, *estimates.values()]):
+        truth, estimates = truth.gas, {k: field.gas for k, field in estimates.items()}
+    return truth, estimates
 
 
 def field_figures(out, truth: Field, estimates: dict[str, Field]) -> list[Path]:

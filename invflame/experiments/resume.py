@@ -14,7 +14,7 @@ import solvers
 from invflame.atomic_files import read_json
 from invflame.experiments import config as configuration
 from invflame.experiments.measurement import Measurement
-from invflame.experiments.run_folder import FINGERPRINT
+from invflame.experiments.run_folder import FINGERPRINT, SUMMARY
 from invflame.field import Field
 
 __all__ = ["FINGERPRINT", "FORCE_HINT", "check_fingerprint", "check_resumable",
@@ -117,8 +117,9 @@ def check_fingerprint(folder, fingerprint: dict, force: bool = False) -> list[st
     Parameters
     ----------
     folder : str or Path
-        The run folder; its ``fingerprint.json`` is compared (a folder without one, written
-        before fingerprints were kept, has nothing to compare).
+        The run folder; its ``fingerprint.json`` is compared. A folder holding results (a
+        checkpoint or a summary) without one cannot be compared and is refused; one without
+        results (a run stopped before its data were made) has nothing to compare.
     fingerprint : dict
         :func:`run_fingerprint` of the resumed run; only its entries are compared.
     force : bool, optional
@@ -135,10 +136,13 @@ def check_fingerprint(folder, fingerprint: dict, force: bool = False) -> list[st
         Naming each changed entry (unless ``force``).
     """
     saved = Path(folder) / FINGERPRINT
-    if not saved.is_file():
+    if saved.is_file():
+        changed = _differences({k: v for k, v in read_json(saved).items() if k in fingerprint},
+                               fingerprint)
+    elif any((Path(folder) / name).is_file() for name in (SUMMARY, "checkpoint.npz")):
+        changed = [f"{FINGERPRINT} is missing, so the truth, data and code cannot be compared"]
+    else:
         return []
-    changed = _differences({k: v for k, v in read_json(saved).items() if k in fingerprint},
-                           fingerprint)
     return _refuse_unless_forced(folder, changed, force,
                                  "what defines the run changed since it was written",
                                  "the same truth, data and code")

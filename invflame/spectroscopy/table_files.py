@@ -47,13 +47,17 @@ def read_table(path, key: str | None = None) -> dict:
     CorruptFileError
         If the file is empty, truncated or not an ``.npz`` archive.
     InputDataError
-        If it lacks entries, its arrays fail the stored hash, or it holds another key.
+        If it lacks entries, its arrays fail the stored hash, it holds another key, or a
+        cache lookup (``key`` given) finds no hash to check.
     """
     fix = "delete it (a cached table is rebuilt on the next run)"
     data = read_npz(path, "absorption table", fix)
     missing = sorted(set(ARRAYS) - set(data))
     if missing:
         raise InputDataError(f"absorption table {path} lacks {missing}; {fix}")
+    if key is not None and "content_hash" not in data:  # the cache writes one with its key
+        raise InputDataError(f"absorption table {path} holds no content hash, so its arrays "
+                             f"cannot be checked; {fix}")
     if "content_hash" in data and str(data["content_hash"]) != content_hash(data):
         raise InputDataError(f"absorption table {path} fails its content hash (the arrays "
                              f"were changed after it was written); {fix}")

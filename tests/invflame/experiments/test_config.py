@@ -85,6 +85,12 @@ def test_a_utf16_file_is_named(tmp_path):
         config.load(path)
 
 
+def test_a_utf8_file_with_a_byte_order_mark_is_read(tmp_path):
+    path = tmp_path / "bom.toml"
+    path.write_bytes("seed = 3\n".encode("utf-8-sig"))  # as some Windows editors save it
+    assert config.load(path)["seed"] == 3
+
+
 def test_missing_file():
     with pytest.raises(FileNotFoundError, match="configuration file not found"):
         config.load("/nonexistent/run.toml")

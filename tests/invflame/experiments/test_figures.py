@@ -36,6 +36,18 @@ def test_field_figures_of_run_folders(tmp_path, plume_fields):
     assert rows["cutaways.png"][0] > rows["errors.png"][0]
 
 
+def test_a_sooting_truth_reconstructed_without_soot_is_drawn_as_gas(tmp_path, plume_fields):
+    truth, estimates = plume_fields
+    folder = tmp_path / "VG-TV"
+    folder.mkdir()
+    truth.with_soot(np.full(truth.grid.shape, 1e-6)).save(folder / "truth.npz")
+    estimates["smoothed"].save(folder / "reconstruction.npz")
+    loaded_truth, loaded = run_fields({"VG/TV": folder})
+    assert loaded_truth.soot is None and loaded["VG/TV"].soot is None
+    written = field_figures(tmp_path, loaded_truth, loaded)
+    assert all(path.is_file() for path in written)
+
+
 def _history(folder, iterations, misfit, epochs, summary=None):
     folder.mkdir()
     rows = ["iteration,loss,misfit,regularizer,grad_norm,time"]

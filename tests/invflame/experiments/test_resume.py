@@ -35,6 +35,17 @@ def test_fingerprint_hashes_the_contents_and_describes_the_solver_options():
     assert runner.run_fingerprint(cfg, None, Data)["truth sha256"] is None
 
 
+def test_resume_refuses_a_run_whose_fingerprint_is_gone(tmp_path):
+    cfg = config.validate(dict(TINY, solver=dict(TINY["solver"], iterations=3)))
+    runner.run_experiment(cfg, tmp_path, progress=False)
+    (tmp_path / "fingerprint.json").unlink()
+    with pytest.raises(config.ConfigError, match="fingerprint.json is missing, so the truth, "
+                                                 "data and code cannot be compared"):
+        runner.run_experiment(cfg, tmp_path, resume=True, progress=False)
+    assert runner.run_experiment(cfg, tmp_path, resume=True, progress=False,
+                                 force=True)["iterations"] == 3
+
+
 def test_resume_refuses_changed_data_and_code_and_force_records_them(tmp_path, capsys):
     cfg = config.validate(dict(TINY, solver=dict(TINY["solver"], iterations=3)))
     runner.run_experiment(cfg, tmp_path, progress=False)

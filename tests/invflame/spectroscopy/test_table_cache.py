@@ -53,8 +53,17 @@ def damage_sigma(path, h2o, cache):
     np.savez(path, **data)
 
 
+def damage_zeros_without_hash(path, h2o, cache):
+    """Zero cross-sections under the right key, with no hash to catch them."""
+    data = dict(np.load(path))
+    data["sigma"] = np.zeros_like(data["sigma"])
+    del data["content_hash"]
+    np.savez(path, **data)
+
+
 @pytest.mark.parametrize("damage", [damage_truncate, damage_empty, damage_garbage,
-                                    damage_other_window, damage_sigma])
+                                    damage_other_window, damage_sigma,
+                                    damage_zeros_without_hash])
 def test_a_bad_cache_file_is_rebuilt_with_a_warning(h2o, cache, caplog, damage):
     good = cached(h2o)
     (path,) = cache.glob("absorption-*.npz")
