@@ -7,6 +7,7 @@ from pathlib import Path
 
 import solvers
 from invflame.atomic_files import write_json
+from invflame.errors import ConfigError
 from invflame.experiments.measurement import Measurement
 from invflame.experiments.model_error import estimate_model_error
 from invflame.scene import Scene
@@ -49,8 +50,19 @@ def choose_lambda(cfg: dict, scene: Scene, representation, measurement: Measurem
         Output folder.
     log : callable
         Receives one line per trial.
+
+    Raises
+    ------
+    ConfigError
+        If the data carry no noise σ (noise-free synthetic data, or a measurement file
+        without noise): the rule has nothing to compare the misfit with.
     """
     from invflame.plotting.parameter_choice import plot_l_curve  # matplotlib, once a run draws
+
+    if not measurement.noisy:
+        raise ConfigError("'regularizer.lambda' = 'discrepancy' needs data with a noise σ, and "
+                          "these data have none (noise.kind = 'none', or a measurement file "
+                          "without noise): give lambda a number, or the file its noise")
 
     reg, solver = cfg["regularizer"], cfg["solver"]
     m = measurement.n_measurements

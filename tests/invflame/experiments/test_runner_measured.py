@@ -215,3 +215,6 @@ def test_a_file_without_noise_is_reported_as_an_unweighted_misfit(simulated, tmp
     assert summary["protocol"]["noise"].startswith("unknown (the file holds no noise)")
     log = (tmp_path / "run" / "log.txt").read_text()
     assert "mean square misfit [(W/(m2 sr cm-1))^2]" in log and "chi2/M" not in log
+    chosen = config.validate(dict(cfg, regularizer={"kind": "tikhonov", "lambda": "discrepancy"}))
+    with pytest.raises(ConfigError, match="'discrepancy' needs data with a noise σ"):
+        runner.run_experiment(chosen, tmp_path / "chosen", progress=False)
