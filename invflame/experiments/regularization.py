@@ -57,12 +57,11 @@ def choose_lambda(cfg: dict, scene: Scene, representation, measurement: Measurem
         If the data carry no noise σ (noise-free synthetic data, or a measurement file
         without noise): the rule has nothing to compare the misfit with.
     """
-    from invflame.plotting.parameter_choice import plot_l_curve  # matplotlib, once a run draws
-
     if not measurement.noisy:
         raise ConfigError("'regularizer.lambda' = 'discrepancy' needs data with a noise σ, and "
                           "these data have none (noise.kind = 'none', or a measurement file "
                           "without noise): give lambda a number, or the file its noise")
+    from invflame.plotting.parameter_choice import plot_l_curve  # matplotlib, once a run draws
 
     reg, solver = cfg["regularizer"], cfg["solver"]
     m = measurement.n_measurements

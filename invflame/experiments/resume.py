@@ -14,7 +14,7 @@ import solvers
 from invflame.atomic_files import read_json
 from invflame.experiments import config as configuration
 from invflame.experiments.measurement import Measurement
-from invflame.experiments.run_folder import FINGERPRINT, SUMMARY
+from invflame.experiments.run_folder import CHECKPOINT, FINGERPRINT, SUMMARY
 from invflame.field import Field
 
 __all__ = ["FINGERPRINT", "FORCE_HINT", "check_fingerprint", "check_resumable",
@@ -139,7 +139,7 @@ def check_fingerprint(folder, fingerprint: dict, force: bool = False) -> list[st
     if saved.is_file():
         changed = _differences({k: v for k, v in read_json(saved).items() if k in fingerprint},
                                fingerprint)
-    elif any((Path(folder) / name).is_file() for name in (SUMMARY, "checkpoint.npz")):
+    elif any((Path(folder) / name).is_file() for name in (SUMMARY, CHECKPOINT)):
         changed = [f"{FINGERPRINT} is missing, so the truth, data and code cannot be compared"]
     else:
         return []

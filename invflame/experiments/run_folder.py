@@ -41,6 +41,8 @@ SUMMARY = "summary.json"
 """Metrics of a run, written last: a folder holding it (and not :data:`INCOMPLETE`) is finished."""
 FINGERPRINT = "fingerprint.json"
 """What defines a run beside its configuration (:mod:`invflame.experiments.resume`)."""
+CHECKPOINT = "checkpoint.npz"
+"""The solver's state, written as it goes, from which ``--resume`` continues."""
 RUN_MARKERS = (SUMMARY, FINGERPRINT, LOCK, INCOMPLETE)
 """Files that only a run writes: a folder holding one of them is a run folder."""
 

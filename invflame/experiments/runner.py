@@ -80,7 +80,7 @@ from invflame.experiments.resume import (
     check_resumable,
     run_fingerprint,
 )
-from invflame.experiments.run_folder import RunLock
+from invflame.experiments.run_folder import CHECKPOINT, SUMMARY, RunLock
 from invflame.experiments.start import initial_fields
 from invflame.experiments.summaries import (
     chi2_per_value,
@@ -263,7 +263,7 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
                start, force: bool = False) -> dict:
     """The body of :func:`run_experiment`, in its locked output folder."""
     solver = cfg["solver"]
-    summary_path, checkpoint = out / "summary.json", out / "checkpoint.npz"
+    summary_path, checkpoint = out / SUMMARY, out / CHECKPOINT
     changed = check_resumable(cfg, out, force) if resume else []
     measured, native = read_data(cfg), load_truth(cfg)  # the files first: quick to refuse
     scene = build_scene(cfg, table, measured, progress)
