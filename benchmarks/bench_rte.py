@@ -13,16 +13,16 @@ the repeats:
 * JVP: one product of the Jacobian from ``Scene.operator.linearize`` (the forward-mode
   sweep, value and tangent together), as Gauss–Newton and PDHG use it;
 * kernel forward, VJP, JVP: the emission kernel alone on the scene's segment fields
-  (:func:`~operators.rte_kernel.emission_radiance`, its pullback of a given cotangent with the
-  value, :func:`~operators.rte_kernel.emission_radiance_jvp`), each with the default sweeps
-  (:func:`~operators.rte_kernel.choose_sweeps`: Numba's on one CPU device) and with XLA's;
+  (:func:`~operators.rte.kernel.emission_radiance`, its pullback of a given cotangent with the
+  value, :func:`~operators.rte.kernel.emission_radiance_jvp`), each with the default sweeps
+  (:func:`~operators.rte.dispatch.choose_sweeps`: Numba's on one CPU device) and with XLA's;
 * exp-only: a jitted ``exp`` over as many float32 elements, in the same ray batches and
   the same number of segment steps per batch as the kernel;
 * with ``--stages``, the stages of the kernel, each a jitted loop over the same batches and
   segment steps on the scene's segment fields: the cross-section spline (gathered table
   rows, Horner sums, the optical depth), the Planck spline, the transmission (``exp`` and
   absorptance), the sums over wavenumber of the reverse sweep, the whole forward and reverse
-  sweeps (the reverse one as XLA runs it and as Numba does, :mod:`operators.rte_sweep_cpu`,
+  sweeps (the reverse one as XLA runs it and as Numba does, :mod:`operators.rte.numba_targets`,
   all rays at once, called by XLA), and the gathers and scatters that put rays into batches and
   back (with their VJP).
 
@@ -60,14 +60,15 @@ from timing import CLOCKS, best_time, best_times
 from invflame.experiments.machine import processor
 from invflame.phantoms.registry import make_phantom
 from invflame.scene import Scene
-from operators import rte_kernel
-from operators.rte_batches import (
+from operators.rte import sweeps_numba, sweeps_xla
+from operators.rte.batches import (
     batched_inputs,
     from_batches,
     ray_order,
     spectra_batches,
 )
-from operators.rte_kernel import emission_radiance, emission_radiance_jvp
+from operators.rte.kernel import emission_radiance, emission_radiance_jvp
+from operators.rte.weights import locate, segment_weights
 
 
 def segment_loop(body, n_segments, init):
@@ -98,16 +99,16 @@ def stages(scene: Scene, fields, repeats: int, clock: str) -> dict:
     order, n_segments = ray_order(lengths, batch_rays)
     temperature, fractions, length = batched_inputs(tables, segment_fields, lengths, order,
                                                     batch_rays)
-    index, interval = jax.vmap(partial(rte_kernel._locate, tables))(temperature, fractions)
-    amount, offset, temp = jax.vmap(partial(rte_kernel._segment_weights, tables))(
+    index, interval = jax.vmap(partial(locate, tables))(temperature, fractions)
+    amount, offset, temp = jax.vmap(partial(segment_weights, tables))(
         interval, temperature, fractions, length)
     batches = (index, amount, offset, temp)
-    radiance = rte_kernel.emission_radiance(tables, segment_fields, lengths, batch_rays)
+    radiance = emission_radiance(tables, segment_fields, lengths, batch_rays)
     cotangent = jnp.ones_like(radiance)
     zeros = jnp.zeros((batch_rays, tables.n_eta), tables.dtype)
 
     def spectra(k, b):
-        return rte_kernel._spectra(tables, b[0][k], b[1][k], b[2][k], b[3][k])
+        return sweeps_xla._spectra(tables, b[0][k], b[1][k], b[2][k], b[3][k])
 
     x = jnp.linspace(0.0, 1.0, zeros.size, dtype=tables.dtype).reshape(zeros.shape)
     n_sums = amount.shape[-1] + 1  # per row of tau, and the offset's (Planck table)
@@ -119,7 +120,7 @@ def stages(scene: Scene, fields, repeats: int, clock: str) -> dict:
     loops = {
         "spline tau": lambda k, acc, b: acc + spectra(k, b)[0],
         "Planck B": lambda k, acc, b: acc + spectra(k, b)[3],
-        "transmission": lambda k, acc, b: acc + sum(rte_kernel._transmission(x * k)),
+        "transmission": lambda k, acc, b: acc + sum(sweeps_xla._transmission(x * k)),
         "reductions": reduce,
     }
     times = {}
@@ -128,19 +129,19 @@ def stages(scene: Scene, fields, repeats: int, clock: str) -> dict:
                                         batches), repeats, clock)
 
     sweep = jax.jit(lambda n, b: jax.lax.map(
-        lambda a: rte_kernel._sweep(tables, *a[1], a[0], None), (n, b)))
+        lambda a: sweeps_xla._sweep(tables, *a[1], a[0], None), (n, b)))
     times["forward sweep"] = best_time(lambda: sweep(n_segments, batches), repeats, clock)
     spectra_in = (spectra_batches(radiance, order, batch_rays),
                   spectra_batches(cotangent, order, batch_rays))
     reverse = jax.jit(lambda n, b, s: jax.lax.map(
-        lambda a: rte_kernel._sweep_vjp(tables, *a[1], a[0], *a[2]), (n, b, s)))
+        lambda a: sweeps_xla._sweep_vjp(tables, *a[1], a[0], *a[2]), (n, b, s)))
     times["reverse sweep"] = best_time(lambda: reverse(n_segments, batches, spectra_in),
                                        repeats, clock)
-    index, weights = rte_kernel._numba_weights(tables, segment_fields)
+    index, weights = sweeps_numba._numba_weights(tables, segment_fields)
     amount, offset = weights(segment_fields, lengths)
     shapes = (jax.ShapeDtypeStruct((*amount.shape[:-1], amount.shape[-1] + 1), tables.dtype),
               jax.ShapeDtypeStruct((0, tables.n_eta), tables.dtype))
-    numba_reverse = jax.jit(lambda t, *a: rte_kernel._numba_sweep("reverse", shapes, t, *a))
+    numba_reverse = jax.jit(lambda t, *a: sweeps_numba._numba_sweep("reverse", shapes, t, *a))
     numba_inputs = (tables, index, amount, offset, lengths, radiance, cotangent)
     times["reverse sweep, Numba"] = best_time(lambda: numba_reverse(*numba_inputs), repeats,
                                               clock)

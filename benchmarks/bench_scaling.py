@@ -9,7 +9,7 @@ Run: ``python benchmarks/bench_scaling.py [--repeats 5] [--quick]`` (about 2–3
    its rays split over 2 devices (``Scene(devices=2)``). Each count runs in a fresh process
    with ``XLA_FLAGS=--xla_force_host_platform_device_count=N``: on a CPU these "devices"
    share the same cores, so this checks the overhead of sharding more than it shows a speedup.
-2. **Growth.** The bare emission kernel (:func:`operators.emission_rte.emission_radiance`,
+2. **Growth.** The bare emission kernel (:func:`operators.rte.kernel.emission_radiance`,
    synthetic tables, two absorbing species, every segment real) for three sizes each of rays,
    segments per ray and spectral points, the others fixed: time, ns per element (segment ×
    wavenumber) and the fitted exponent of time versus size.
@@ -100,7 +100,7 @@ def strong_scaling(repeats: int) -> list[dict]:
 # -- 2. growth of the kernel's cost ----------------------------------------------------------
 def synthetic_tables(n_eta: int):
     """Kernel tables of two absorbing species with smooth random cross-sections (cm²)."""
-    from operators.emission_rte import RTETables
+    from operators.rte import RTETables
     from operators.tabulated import PiecewiseCubic
 
     rng = np.random.default_rng(0)
@@ -116,7 +116,7 @@ def kernel_epoch(n_rays: int, n_seg: int, n_eta: int, repeats: int) -> float:
     import jax
     import jax.numpy as jnp
 
-    from operators.emission_rte import emission_radiance
+    from operators.rte import emission_radiance
 
     tables = synthetic_tables(n_eta)
     rng = np.random.default_rng(1)

@@ -30,37 +30,29 @@ skipped with the solver's reason; one that raises is reported as failed, with th
 
 At the paper's size the reference's 2000 Adam epochs take about an hour per problem on two CPU
 cores. ``--reference-run DIR`` takes the reference from a finished ``invflame reproduce`` run of
-the same method instead (:func:`recorded_reference`): its objective and wall time per iteration
-from ``history.csv``, its MSE_T at the start and the end (``reconstruction.npz``, scored against
-the race's truth) and none in between. The race then runs on wall time (``--clock wall``, on an
-idle machine), and a run whose start objective differs from the race problem's is refused.
+the same method instead (``solver_race_reference.recorded_reference``): its objective and wall
+time per iteration from ``history.csv``, its MSE_T at the start and the end
+(``reconstruction.npz``, scored against the race's truth) and none in between. The race then
+runs on wall time (``--clock wall``, on an idle machine), and a run whose start objective
+differs from the race problem's is refused.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import math
 import time
-import tomllib
 from pathlib import Path
 
-import matplotlib
-import matplotlib.lines
-import matplotlib.ticker
-import numpy as np
+from solver_race_reference import recorded_reference, reference_levels
+from solver_race_report import merged, report
+from solver_race_runs import race
+from timing import CLOCKS
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-from timing import CLOCKS  # noqa: E402
-
-import operators  # noqa: E402
-import solvers  # noqa: E402
-from invflame.experiments import reproduce, runner  # noqa: E402
-from invflame.experiments.figures import read_history  # noqa: E402
-from invflame.experiments.metrics import normalized_mse  # noqa: E402
-from invflame.experiments.regularization import regularizer_weight  # noqa: E402
-from invflame.field import Field  # noqa: E402
+import solvers
+from invflame.experiments import reproduce, runner
+from invflame.experiments.metrics import normalized_mse
+from invflame.experiments.regularization import regularizer_weight
 
 #: Variant name → (registered solver, options). A registered solver missing here races with
 #: its defaults under its own name.
@@ -77,118 +69,6 @@ VARIANTS = {
     "pdhg": ("pdhg", {}),
 }
 METHODS = {"tikhonov": "VG/Tikh.", "tv": "VG/TV"}
-FRACTIONS = (0.25, 0.5, 1.0)
-COUNTS = ("forward", "jvp", "vjp")
-GRACE = 1.5  # a run still inside an iteration at GRACE x its budget is cut off there
-XLABELS = {"cpu": "CPU time of the process [s]", "wall": "wall time [s]"}
-
-
-class OutOfTime(RuntimeError):
-    """A counted evaluation asked for after the run's deadline."""
-
-
-class CountingOperator(operators.Operator):
-    """An operator whose evaluations are counted: values F(x), JVPs and VJPs, also those made
-    through the Jacobians it returns.
-
-    Parameters
-    ----------
-    op : operators.Operator
-        The operator counted (same shapes, dtype and units).
-
-    Attributes
-    ----------
-    counts : dict
-        ``forward``, ``jvp`` and ``vjp``: evaluations so far.
-    clock, deadline : callable, float or None
-        A clock (:data:`CLOCKS`) and a time of it; an evaluation asked for later raises
-        :class:`OutOfTime` and sets ``expired``.
-    """
-
-    def __init__(self, op: operators.Operator):
-        super().__init__(op.dims, op.dimsd, dtype=op.dtype, name=op.name)
-        self.op = op
-        self.counts = dict.fromkeys(COUNTS, 0)
-        self.clock, self.deadline = time.perf_counter, None
-        self.expired = False
-
-    def _count(self, kind: str) -> None:
-        if self.deadline is not None and self.clock() > self.deadline:
-            self.expired = True
-            raise OutOfTime(f"cut off inside an iteration at {GRACE:g} x the budget")
-        self.counts[kind] += 1
-
-    def _forward(self, x):
-        self._count("forward")
-        return self.op(x)
-
-    def _jvp(self, x, v):
-        self._count("jvp")
-        return self.op.jvp(x, v)
-
-    def _vjp(self, x, w):
-        self._count("vjp")
-        return self.op.vjp(x, w)
-
-    def linearize(self, x) -> operators.Jacobian:
-        """The inner operator's Jacobian at ``x``, its products counted."""
-        self._count("forward")
-        jacobian = self.op.linearize(x)
-
-        def jvp(v):
-            self._count("jvp")
-            return jacobian(v)
-
-        def vjp(w):
-            self._count("vjp")
-            return jacobian.adjoint(w)
-
-        return operators.Jacobian(self, x, jacobian.value, jvp=jvp, vjp=vjp)
-
-
-class Trace(solvers.Callback):
-    """One row per iteration (and the start): CPU and wall time since the trace began (before
-    the run's first evaluation) without this callback's own time, evaluation counts, objective
-    and MSE_T; asks the run to stop once ``budget`` seconds of ``clock`` are spent.
-
-    Parameters
-    ----------
-    counter : CountingOperator
-        The problem's counted forward operator.
-    mse_t : callable
-        Parameters → normalized MSE of the temperature against the truth.
-    clock : {"cpu", "wall"}
-        The clock of the budget (:data:`CLOCKS`).
-    budget : float or None
-        Seconds of ``clock``; None for no budget.
-    """
-
-    def __init__(self, counter: CountingOperator, mse_t, clock: str, budget: float | None):
-        self.counter, self.mse_t, self.clock, self.budget = counter, mse_t, clock, budget
-        self.rows: list[dict] = []
-        self.overhead = dict.fromkeys(CLOCKS, 0.0)
-        self.began = {key: read() for key, read in CLOCKS.items()}
-
-    def elapsed(self, key: str) -> float:
-        """Seconds of clock ``key`` spent by the run, this callback's own time excluded."""
-        return CLOCKS[key]() - self.began[key] - self.overhead[key]
-
-    def on_start(self, run):
-        self._record(run)
-
-    def __call__(self, run):
-        self._record(run)
-        return self.budget is not None and self.rows[-1][self.clock] >= self.budget
-
-    def _record(self, run) -> None:
-        now = {key: read() for key, read in CLOCKS.items()}
-        self.rows.append({"iteration": run.iteration,
-                          **{key: now[key] - self.began[key] - self.overhead[key]
-                             for key in CLOCKS},
-                          **self.counter.counts, "loss": run.current.loss,
-                          "mse_t": self.mse_t(run.x)})
-        for key, read in CLOCKS.items():
-            self.overhead[key] += read() - now[key]
 
 
 def build_problems(size: str, protocol: str, regularizers: list[str],
@@ -248,240 +128,6 @@ def warm_up(problem: solvers.Problem) -> None:
     evaluation.grad.sum()
 
 
-def counted(problem: solvers.Problem) -> tuple[solvers.Problem, CountingOperator]:
-    """A copy of ``problem`` whose forward operator counts its evaluations."""
-    counter = CountingOperator(problem.forward)
-    return solvers.Problem(counter, problem.data, regularizer=problem.regularizer,
-                           lam=problem.lam, lower=problem.lower, upper=problem.upper,
-                           x0=problem.x0, name=problem.name,
-                           metadata=problem.metadata), counter
-
-
-def race(problem, mse_t, name: str, options: dict, max_iter: int, clock: str,
-         budget: float | None) -> dict:
-    """One solver run on a counted copy of ``problem``; its trace, or why it was skipped."""
-    solver = solvers.get(name)(max_iter=max_iter, **options)
-    race_problem, counter = counted(problem)
-    try:
-        solver.check(race_problem)
-    except solvers.UnsupportedProblemError as refusal:
-        return {"skipped": str(refusal)}
-    trace = Trace(counter, mse_t, clock, budget)
-    if budget is not None:
-        counter.clock = CLOCKS[clock]
-        counter.deadline = counter.clock() + GRACE * budget
-    try:
-        stop = solver.run(race_problem, callbacks=[trace]).stop_reason
-    except Exception as error:  # jaxopt's host callback wraps OutOfTime in an error of its own
-        stop = (f"cut off: inside an iteration at {GRACE:g} x the budget" if counter.expired
-                else f"failed: {type(error).__name__}: {str(error).strip().splitlines()[-1]}")
-    if stop.startswith("callback"):
-        stop = f"budget: {budget:g} s of {clock} time spent"
-    return {"solver": name, "options": options, "stop": stop, "rows": trace.rows,
-            "seconds": {key: trace.elapsed(key) for key in CLOCKS}}
-
-
-def recorded_reference(run_dir: Path, kind: str, problem: solvers.Problem,
-                       mse_t_of_fields) -> tuple[str, dict]:
-    """The reference from a finished ``invflame reproduce`` run of the race's problem.
-
-    Parameters
-    ----------
-    run_dir : Path
-        The run's folder (``config.toml``, ``history.csv``, ``summary.json``,
-        ``reconstruction.npz``), e.g. ``results/paper/VG-Tikh``.
-    kind : {"tikhonov", "tv"}
-        The race problem's regularizer, which the run's must be.
-    problem : solvers.Problem
-        The race problem; the run's objective at its start must equal this problem's at ``x0``
-        within 1e-4 relative, or the run solved another problem.
-    mse_t_of_fields : callable
-        Physical fields → MSE_T against the race's truth.
-
-    Returns
-    -------
-    name : str
-        The reference's name, from the run's solver and learning rate.
-    run : dict
-        As :func:`race` returns: one row per recorded iteration, wall seconds since the first
-        iterate was evaluated (the run's compile excluded), F and VJP counts of one each per
-        iterate (a gradient step's), the objective, and MSE_T at the start and the end only
-        (NaN between: the run did not record it); CPU seconds are NaN.
-    """
-    paths = {name: run_dir / name for name in ("config.toml", "history.csv", "summary.json",
-                                                "initial.npz", "reconstruction.npz")}
-    missing = [name for name, path in paths.items() if not path.is_file()]
-    if missing:
-        raise SystemExit(f"--reference-run {run_dir}: no finished run there ({', '.join(missing)} "
-                         "missing); finish it with `invflame reproduce ... --resume` first")
-    cfg = tomllib.loads(paths["config.toml"].read_text())
-    if cfg["regularizer"]["kind"] != kind:
-        raise SystemExit(f"--reference-run {run_dir} regularizes with "
-                         f"{cfg['regularizer']['kind']!r}, the race with {kind!r}: pass the run "
-                         "of the raced method (--regularizer)")
-    history = read_history(paths["history.csv"])
-    start = problem.evaluate(problem.x0).loss
-    if abs(history["loss"][0] - start) > 1e-4 * abs(start):
-        raise SystemExit(f"--reference-run {run_dir} starts at objective "
-                         f"{history['loss'][0]:.6g}, the race problem at {start:.6g}: the run "
-                         "solved another problem (size, protocol, seed or λ differ)")
-    mse_t = np.full(history["loss"].size, math.nan)
-    mse_t[[0, -1]] = [mse_t_of_fields(Field.load(paths[name]).values)
-                      for name in ("initial.npz", "reconstruction.npz")]
-    rows = [{"iteration": int(k), "cpu": math.nan, "wall": float(t - history["time"][0]),
-             "forward": int(k) + 1, "jvp": 0, "vjp": int(k) + 1, "loss": float(loss),
-             "mse_t": float(error)}
-            for k, t, loss, error in zip(np.rint(history["iteration"]), history["time"],
-                                         history["loss"], mse_t, strict=True)]
-    summary = json.loads(paths["summary.json"].read_text())
-    options = cfg["solver"].get("options", {})
-    name = (f"{cfg['solver']['name']}" + (f" lr={options['lr']:g}" if "lr" in options else "")
-            + " (recorded)")
-    return name, {"solver": cfg["solver"]["name"], "options": options,
-                  "stop": summary["stop_reason"], "rows": rows,
-                  "seconds": {"cpu": math.nan, "wall": rows[-1]["wall"]}}
-
-
-def first_reach(rows: list[dict], key: str, level: float) -> dict | None:
-    """The first row whose ``key`` is at most ``level``, or None (a NaN, not recorded, never
-    is)."""
-    return next((row for row in rows if row[key] <= level), None)
-
-
-def reference_levels(rows: list[dict], n_iter: int) -> dict:
-    """The reference's objective and MSE_T after each fraction of its ``n_iter`` iterations."""
-    levels = {}
-    for fraction in FRACTIONS:
-        k = min(round(fraction * n_iter), rows[-1]["iteration"])
-        row = next(r for r in rows if r["iteration"] == k)
-        levels[f"{fraction:.0%}"] = {"iteration": k, "loss": row["loss"], "mse_t": row["mse_t"]}
-    return levels
-
-
-def _number(value: float, spec: str) -> str:
-    return "–" if math.isnan(value) else format(value, spec)
-
-
-def _cell(row: dict | None, clock: str) -> str:
-    if row is None:
-        return "–"
-    return f"{row[clock]:.1f} s · {row['forward']}/{row['jvp']}/{row['vjp']}"
-
-
-def markdown(label: str, runs: dict, levels: dict, clock: str) -> list[str]:
-    """One problem's table: per variant, time and evaluations to each reference level."""
-    heads = [f"{key} ≤ ref@{fraction}" for key in ("objective", "MSE_T") for fraction in levels]
-    lines = [f"**{label}**: reference levels "
-             + "; ".join(f"@{f} (iteration {v['iteration']}): objective {v['loss']:.4g}, "
-                         f"MSE_T {_number(v['mse_t'], '.5f')}" for f, v in levels.items()),
-             "",
-             "| variant | iterations | F/JVP/VJP | CPU / wall [s] | final objective | "
-             "final MSE_T | " + " | ".join(heads) + " | stop |",
-             "|---|---:|---:|---:|---:|---:|" + "---:|" * len(heads) + "---|"]
-    for variant, run in runs.items():
-        if "skipped" in run:
-            continue
-        rows, last = run["rows"], run["rows"][-1]
-        cells = [_cell(first_reach(rows, key, level[key]), clock)
-                 if not math.isnan(level[key]) else "not recorded"
-                 for key in ("loss", "mse_t") for level in levels.values()]
-        seconds = run["seconds"]
-        lines.append(f"| {variant} | {last['iteration']} | {last['forward']}/{last['jvp']}/"
-                     f"{last['vjp']} | {_number(seconds['cpu'], '.0f')} / "
-                     f"{seconds['wall']:.0f} | "
-                     f"{last['loss']:.4g} | {last['mse_t']:.5f} | " + " | ".join(cells)
-                     + f" | {run['stop'].split(':')[0]} |")
-    lines += ["", *(f"- {variant} skipped: {run['skipped']}" for variant, run in runs.items()
-                    if "skipped" in run),
-              *(f"- {variant} failed after {run['rows'][-1]['iteration']} iterations: "
-                f"{run['stop'].strip().splitlines()[-1]}" for variant, run in runs.items()
-                if run.get("stop", "").startswith("failed"))]
-    return lines
-
-
-def verdict(label: str, runs: dict, reference: str, levels: dict, clock: str) -> list[str]:
-    """Which variant reaches the reference's final MSE_T, and its final objective, first, and
-    how much sooner than the reference itself."""
-    lines = []
-    for key, name in (("mse_t", "MSE_T"), ("loss", "objective")):
-        level = levels["100%"][key]
-        rows = runs[reference]["rows"]
-        own = first_reach(rows, key, level)[clock]
-        if any(math.isnan(row[key]) for row in rows):
-            ratio_note = (f" (at most: the reference's {name} was recorded only at its start "
-                          "and end)")
-        else:
-            ratio_note = ""
-        reached = {variant: first_reach(run["rows"], key, level) for variant, run in runs.items()
-                   if "skipped" not in run and variant != reference}
-        reached = {variant: row for variant, row in reached.items() if row is not None}
-        if not reached:
-            lines.append(f"- {label}: no variant reaches the reference's final {name} "
-                         f"{level:.4g} (the reference: {own:.1f} s of {clock} time)")
-            continue
-        winner = min(reached, key=lambda variant: reached[variant][clock])
-        time_won = reached[winner][clock]
-        ratio = (f"{own / time_won:.1f}x sooner{ratio_note}" if time_won < own
-                 else "no sooner")
-        lines.append(f"- {label}: {winner} reaches the reference's final {name} {level:.4g} "
-                     f"first, in {time_won:.1f} s of {clock} time against the reference's "
-                     f"{own:.1f} s ({ratio})")
-    return lines
-
-
-def plot(results: dict, path: Path, protocol: str, reference: str, clock: str) -> None:
-    """MSE_T (top) and objective (bottom) against ``clock`` time, one column per problem; a cross
-    ends a run that failed or was cut off inside an iteration."""
-    variants = list(dict.fromkeys(v for runs in results.values() for v in runs["runs"]))
-    colors = dict(zip([v for v in variants if v != reference],
-                      plt.get_cmap("tab10").colors, strict=False))
-    colors[reference] = "black"
-    fig, axes = plt.subplots(2, len(results), figsize=(5.5 * len(results) + 2.4, 8),
-                             squeeze=False, sharex="col")
-    for column, (label, problem) in enumerate(results.items()):
-        for variant, run in problem["runs"].items():
-            if "skipped" in run:
-                continue
-            times = [row[clock] for row in run["rows"]] + [run["seconds"][clock]]
-            for row, key in ((0, "mse_t"), (1, "loss")):
-                values = [r[key] for r in run["rows"]] + [run["rows"][-1][key]]
-                kept = [(t, v) for t, v in zip(times, values, strict=True) if not math.isnan(v)]
-                gaps = len(kept) < len(values)  # recorded at the ends only: dashed, big dots
-                axes[row, column].plot(*zip(*kept, strict=True), marker="o" if gaps else ".",
-                                       ms=6 if gaps else 3, ls="--" if gaps else "-",
-                                       color=colors[variant],
-                                       lw=2.2 if variant == reference else 1.3)
-                if run["stop"].startswith(("failed", "cut off")):
-                    axes[row, column].plot(times[-1], values[-1], "x", ms=8, mew=2,
-                                           color=colors[variant])
-        final = problem["levels"]["100%"]
-        for row, key in ((0, "mse_t"), (1, "loss")):
-            axis = axes[row, column]
-            axis.axhline(final[key], color="grey", ls=":", lw=1.2)
-            axis.set_yscale("log")
-            axis.yaxis.set_major_formatter(matplotlib.ticker.FormatStrFormatter("%.4g"))
-            low, high = axis.get_ylim()
-            axis.yaxis.set_minor_formatter(  # label minor ticks only within a decade
-                matplotlib.ticker.FormatStrFormatter("%.4g") if high < 10 * low
-                else matplotlib.ticker.NullFormatter())
-            axis.tick_params(axis="y", which="both", labelsize=8)
-            axis.grid(True, which="both", alpha=0.3)
-        axes[0, column].set_title(f"{label}, {protocol} protocol")
-        axes[0, column].set_ylabel("MSE_T (normalized)")
-        axes[1, column].set_ylabel("objective")
-        axes[1, column].set_xlabel(XLABELS[clock])
-    handles = [matplotlib.lines.Line2D([], [], color=colors[v], lw=2.2 if v == reference else 1.3,
-                                       label=v) for v in variants]
-    handles += [matplotlib.lines.Line2D([], [], color="grey", ls=":",
-                                        label="reference's final level"),
-                matplotlib.lines.Line2D([], [], color="grey", marker="x", ls="",
-                                        label="failed or cut off")]
-    fig.legend(handles=handles, loc="center right", frameon=False, fontsize=9)
-    fig.tight_layout(rect=(0, 0, 1 - 2.4 / (5.5 * len(results) + 2.4), 1))
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-
-
 def run_race(args, variants: dict) -> dict:
     """Race the chosen variants on each problem; the record that :func:`report` writes, also
     saved to ``race.json`` in ``args.out`` after every run (a killed race leaves what it did)."""
@@ -509,7 +155,8 @@ def run_race(args, variants: dict) -> dict:
                                      "levels": reference_levels(runs[reference]["rows"], n_ref)}
         for variant, (name, options) in variants.items():
             record["seconds"] = time.perf_counter() - began
-            (args.out / "race.json").write_text(json.dumps(record, indent=1))
+            (args.out / "race.json").write_text(json.dumps(
+                record, indent=1, default=lambda value: value.tolist()))  # NumPy values
             runs[variant] = run = race(problem, built["mse_t"], name, options, 10**6,
                                        args.clock, args.budget_s)
             print(f"  {variant}: " + (f"skipped ({run['skipped']})" if "skipped" in run else
@@ -519,40 +166,6 @@ def run_race(args, variants: dict) -> dict:
                   flush=True)
     record["seconds"] = time.perf_counter() - began
     return record
-
-
-def merged(records: list[dict]) -> dict:
-    """One record of the problems of several races of the same size, protocol and reference."""
-    keys = ("size", "protocol", "clock", "budget_s", "reference", "reference_iterations")
-    differ = [key for key in keys if len({json.dumps(r[key]) for r in records}) > 1]
-    if differ:
-        raise SystemExit(f"the races differ in {', '.join(differ)}: merge only like races")
-    return {**{key: records[0][key] for key in keys},
-            "seconds": sum(r["seconds"] for r in records),
-            "problems": {k: v for r in records for k, v in r["problems"].items()}}
-
-
-def report(record: dict, out: Path) -> None:
-    """Print the tables and verdicts and write ``race.md``, ``race.json``, ``race.png``."""
-    reference = record["reference"]
-    lines = [f"Size `{record['size']}`, protocol `{record['protocol']}`; reference: "
-             f"{reference.removesuffix(' (reference)')} for {record['reference_iterations']} "
-             f"iterations; every other variant {record['budget_s']:g} s of {record['clock']} "
-             f"time (cut off at {GRACE:g}x inside an iteration). Cells: {record['clock']} "
-             "time and F/JVP/VJP evaluations when the variant first reaches the reference's "
-             "objective or MSE_T after 25/50/100 % of its iterations; –: not within its "
-             f"budget. The races took {record['seconds']:.0f} s of wall time in all.", ""]
-    for label, problem in record["problems"].items():
-        lines += [*markdown(label, problem["runs"], problem["levels"], record["clock"]),
-                  *verdict(label, problem["runs"], reference, problem["levels"],
-                           record["clock"]), ""]
-    text = "\n".join(lines)
-    print(text)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "race.md").write_text(text)
-    (out / "race.json").write_text(json.dumps(record, indent=1))
-    plot(record["problems"], out / "race.png", record["protocol"], reference, record["clock"])
-    print(f"wrote {out / 'race.md'}, race.json, race.png")
 
 
 def main():

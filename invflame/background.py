@@ -3,7 +3,7 @@ r"""What the cameras see behind the flame: a black-body wall or a measured backg
 Each ray of a camera ends on the background, whose radiance :math:`I_\mathrm{bg}(\eta)` the
 flame transmits with the ray's transmittance :math:`\tau_\mathrm{ray}(\eta)`, so a pixel sees
 :math:`I = I_\mathrm{flame} + \tau_\mathrm{ray} I_\mathrm{bg}` (the emission kernel,
-:mod:`operators.rte_kernel`). Two kinds, both evaluated on any line-by-line grid by
+:mod:`operators.rte.kernel`). Two kinds, both evaluated on any line-by-line grid by
 :meth:`Background.on_grid`:
 
 - :class:`BlackbodyWall`: a grey wall, :math:`I_\mathrm{bg} = \varepsilon B_\eta(T_\mathrm{wall})`,
@@ -14,31 +14,17 @@ flame transmits with the ray's transmittance :math:`\tau_\mathrm{ray}(\eta)`, so
   already smoothed by its lineshape, which the model applies once more: use it for smooth
   backgrounds (walls, a cold sky), where this changes nothing.
 
-Files (:func:`read_background`, :func:`write_background`) are NetCDF: a variable
-``background`` (camera, wavenumber) in W/(m2 sr cm-1) with the coordinate ``wavenumber`` in
-cm-1, or a measurement file (:mod:`invflame.measurement_file`) of a frame without the flame,
-whose spectra are averaged over each camera's pixels (bad pixels and wavenumbers left out).
-Configuration: ``[background] kind = "none" | "blackbody" | "file"``, ``temperature`` (K),
-``emissivity``, ``file`` (:func:`background_from_config`).
+Measured backgrounds are read from files, and a configuration's ``[background]`` made into a
+background, by :mod:`invflame.background_file`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
-import xarray as xr
 
-from invflame.atomic_files import read_netcdf, write_atomic
-from invflame.errors import InputDataError
-from operators.planck import planck
-
-RADIANCE_UNITS = "W/(m2 sr cm-1)"
-"""``units`` of a background file's ``background`` variable."""
-
-KINDS = ("none", "blackbody", "file")
-"""Values of ``background.kind`` in a configuration."""
+from operators.rte.planck import planck
 
 
 class Background:
@@ -142,82 +128,3 @@ class MeasuredBackground(Background):
         return {"kind": "file", "source": self.source,
                 "wavenumber_cm-1": [float(self.wavenumber[0]), float(self.wavenumber[-1])],
                 "n_spectra": int(self.radiance.shape[0])}
-
-
-def write_background(background: MeasuredBackground, path) -> Path:
-    """Write measured background spectra as NetCDF (``background`` (camera, wavenumber) in
-    W/(m2 sr cm-1), coordinate ``wavenumber`` in cm-1), atomically; returns ``path``."""
-    dataset = xr.Dataset(
-        {"background": (("camera", "wavenumber"), background.radiance,
-                        {"units": RADIANCE_UNITS, "long_name": "background spectral radiance"})},
-        coords={"wavenumber": ("wavenumber", background.wavenumber,
-                               {"units": "cm-1", "long_name": "wavenumber"})},
-        attrs={"title": "invflame background", "Conventions": "CF-1.10"})
-    content = dataset.to_netcdf(engine="netcdf4", format="NETCDF4")
-    return write_atomic(path, lambda handle: handle.write(content))
-
-
-def read_background(path) -> MeasuredBackground:
-    """Background spectra from a NetCDF file: a ``background`` variable (camera, wavenumber),
-    or a measurement file of a frame without the flame (its spectra averaged per camera).
-
-    Raises
-    ------
-    FileNotFoundError
-        If there is no file at ``path``.
-    InputDataError
-        For a file that is neither, or whose values are not usable; the message names the file
-        and the variable.
-    """
-    path = Path(path)
-    dataset = read_netcdf(path, "background file")
-    try:
-        if "background" in dataset.variables:
-            variable = dataset["background"]
-            if variable.dims != ("camera", "wavenumber"):
-                raise InputDataError(f"{path}: variable 'background' has dimensions "
-                                     f"{variable.dims}, expected ('camera', 'wavenumber')")
-            if variable.attrs.get("units") != RADIANCE_UNITS:
-                raise InputDataError(f"{path}: variable 'background' has units "
-                                     f"{variable.attrs.get('units')!r}, expected "
-                                     f"{RADIANCE_UNITS!r}")
-            return MeasuredBackground(dataset["wavenumber"].values, variable.values, str(path))
-        if "radiance" in dataset.variables:
-            return _frame_background(path)
-    except ValueError as err:
-        raise InputDataError(str(err)) from err
-    raise InputDataError(f"{path}: holds neither a variable 'background' (camera, wavenumber) "
-                         "nor a measurement's 'radiance'; see invflame.background")
-
-
-def _frame_background(path: Path) -> MeasuredBackground:
-    """Per-camera mean spectrum of a measurement file, bad pixels and wavenumbers left out."""
-    from invflame.measurement_file import read_measurement
-
-    measured = read_measurement(path)
-    sigma = np.broadcast_to(measured.measurement.sigma, measured.measurement.data.shape)
-    good = np.isfinite(sigma)
-    keep = good.any(axis=0)
-    radiance = []
-    for data, ok in zip(measured.rig.split_images(measured.measurement.data),
-                        measured.rig.split_images(good), strict=True):
-        data, ok = data.reshape(-1, data.shape[-1]), ok.reshape(-1, ok.shape[-1])
-        radiance.append(np.sum(data * ok, axis=0)[keep] / np.maximum(ok.sum(axis=0)[keep], 1))
-    return MeasuredBackground(measured.wavenumber[keep], np.array(radiance), str(path))
-
-
-def background_from_config(section: dict) -> Background | None:
-    """The background of a configuration's ``[background]`` section (None for ``"none"``).
-
-    Parameters
-    ----------
-    section : dict
-        ``kind`` (one of :data:`KINDS`), ``temperature`` (K) and ``emissivity`` for
-        ``"blackbody"``, ``file`` (a path) for ``"file"``.
-    """
-    kind = section["kind"]
-    if kind == "blackbody":
-        return BlackbodyWall(section["temperature"], section["emissivity"])
-    if kind == "file":
-        return read_background(section["file"])
-    return None

@@ -2,7 +2,8 @@
 
 Every message names what was wrong (the configuration key, the file and line, the variable),
 the value found and what is allowed or how to fix it. The command line (:func:`invflame.cli.main`)
-prints the message of any :class:`InvflameError` without a traceback and exits with status 2.
+prints the message of any :class:`InvflameError` without a traceback and exits with status 2;
+a :class:`ConfigError` may hold several messages, printed one per line.
 
 The types subclass the built-in exceptions a caller would otherwise catch (``ValueError`` for
 bad values, ``OSError`` for files and folders), so ``except ValueError`` keeps working.
@@ -16,7 +17,22 @@ class InvflameError(Exception):
 
 
 class ConfigError(InvflameError, ValueError):
-    """A configuration key or value is invalid; the message names the key and what is allowed."""
+    """Configuration keys or values are invalid; each message names a key and what is allowed.
+
+    Parameters
+    ----------
+    *messages : str
+        One line per error found (a configuration is checked whole: every error at once).
+
+    Attributes
+    ----------
+    messages : list of str
+        The errors, one line each; ``str(error)`` joins them with newlines.
+    """
+
+    def __init__(self, *messages: str):
+        super().__init__("\n".join(messages))
+        self.messages = list(messages)
 
 
 class InputDataError(InvflameError, ValueError):

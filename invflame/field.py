@@ -38,7 +38,8 @@ SOOTY_FIELD_NAMES = (*FIELD_NAMES, SOOT_NAME)
 _SUM_TOLERANCE = 1e-5  # float32 rounding allowance on sum(X) <= 1
 
 
-def validate_values(values: np.ndarray, grid: VoxelGrid, *, mixture: bool = True) -> None:
+def validate_values(values: np.ndarray, grid: VoxelGrid, *, mixture: bool = True,
+                    soot: bool | None = None) -> None:
     """Check a field array against a grid; raise ``ValueError`` saying what is wrong.
 
     Parameters
@@ -51,34 +52,18 @@ def validate_values(values: np.ndarray, grid: VoxelGrid, *, mixture: bool = True
     mixture : bool, optional
         Also check that the mole fractions sum to at most 1 (default). False checks each
         field's own range only, as for the iterates of a solver bounded field by field.
+    soot : bool, optional
+        True: the soot volume fraction must be there; False: it must not; default None:
+        either.
     """
-    if values.shape not in ((len(FIELD_NAMES), *grid.shape), (len(SOOTY_FIELD_NAMES),
-                                                                 *grid.shape)):
-        raise ValueError(
-            f"field values must have shape {(len(FIELD_NAMES), *grid.shape)} = (fields "
-            f"{FIELD_NAMES}, *grid.shape), or {(len(SOOTY_FIELD_NAMES), *grid.shape)} with the "
-            f"soot volume fraction last; got {values.shape}"
-        )
-    axes = tuple(range(1, values.ndim))
-    lows, highs = values.min(axis=axes), values.max(axis=axes)  # NaN and inf show here
-    if not (np.isfinite(lows).all() and np.isfinite(highs).all()):
-        bad = ~np.isfinite(values)
-        names = [SOOTY_FIELD_NAMES[i] for i in np.unique(np.nonzero(bad)[0])]
-        raise ValueError(f"field values contain NaN or inf in {names} ({int(bad.sum())} entries)")
-    t_min = float(lows[0])
-    if t_min <= 0:
-        raise ValueError(f"temperature must be > 0 K everywhere; minimum is {t_min} K")
-    for i, name in enumerate(SPECIES, start=1):
-        lo, hi = float(lows[i]), float(highs[i])
-        if lo < 0 or hi > 1:
-            raise ValueError(
-                f"mole fraction X_{name} must lie in [0, 1]; got range [{lo}, {hi}] "
-                "(clip round-off before building the field)"
-            )
-    if len(values) == len(SOOTY_FIELD_NAMES):
-        lo, hi = float(lows[-1]), float(highs[-1])
-        if lo < 0 or hi >= 1:
-            raise ValueError(f"soot volume fraction must lie in [0, 1); got range [{lo}, {hi}]")
+    allowed = (FIELD_NAMES, SOOTY_FIELD_NAMES) if soot is None else (
+        SOOTY_FIELD_NAMES if soot else FIELD_NAMES,)
+    names = next((n for n in allowed if values.shape == (len(n), *grid.shape)), None)
+    if names is None:
+        shapes = " or ".join(f"{(len(n), *grid.shape)} (fields {n})" for n in allowed)
+        raise ValueError(f"field values must have shape {shapes}, i.e. (fields, *grid.shape); "
+                         f"got {values.shape}")
+    _check_ranges(values, names)
     if not mixture:
         return
     total = float(values[1:len(FIELD_NAMES)].sum(axis=0).max())
@@ -86,6 +71,46 @@ def validate_values(values: np.ndarray, grid: VoxelGrid, *, mixture: bool = True
         raise ValueError(
             f"mole fractions of {SPECIES} must sum to at most 1; maximum sum is {total}"
         )
+
+
+def validate_soot(soot, grid: VoxelGrid) -> np.ndarray:
+    """A soot volume fraction per voxel as a float64 copy, checked as :func:`validate_values`
+    checks the soot field; raise ``ValueError`` saying what is wrong.
+
+    Parameters
+    ----------
+    soot : array_like, shape ``grid.shape``
+        Soot volume fraction per voxel [1], in [0, 1).
+    grid : VoxelGrid
+        Grid of the voxels.
+    """
+    soot = np.array(soot, np.float64)
+    if soot.shape != grid.shape:
+        raise ValueError(f"soot must be a volume fraction per voxel of shape {grid.shape}, got "
+                         f"{soot.shape}")
+    _check_ranges(soot[None], (SOOT_NAME,))
+    return soot
+
+
+def _check_ranges(values: np.ndarray, names: tuple[str, ...]) -> None:
+    """Refuse NaN or inf, T <= 0 K, mole fractions outside [0, 1] and soot volume fractions
+    outside [0, 1); ``values[i]`` is the field ``names[i]``."""
+    axes = tuple(range(1, values.ndim))
+    lows, highs = values.min(axis=axes), values.max(axis=axes)  # NaN and inf show here
+    if not (np.isfinite(lows).all() and np.isfinite(highs).all()):
+        bad = ~np.isfinite(values)
+        named = [names[i] for i in np.unique(np.nonzero(bad)[0])]
+        raise ValueError(f"field values contain NaN or inf in {named} ({int(bad.sum())} entries)")
+    for name, lo, hi in zip(names, lows.tolist(), highs.tolist(), strict=True):
+        if name == "T" and lo <= 0:
+            raise ValueError(f"temperature must be > 0 K everywhere; minimum is {lo} K")
+        if name in SPECIES and (lo < 0 or hi > 1):
+            raise ValueError(
+                f"mole fraction X_{name} must lie in [0, 1]; got range [{lo}, {hi}] "
+                "(clip round-off before building the field)"
+            )
+        if name == SOOT_NAME and (lo < 0 or hi >= 1):
+            raise ValueError(f"soot volume fraction must lie in [0, 1); got range [{lo}, {hi}]")
 
 
 class Field:

@@ -26,7 +26,7 @@ import numpy as np
 import xarray as xr
 
 from invflame.errors import InputDataError
-from operators.planck import planck
+from operators.rte.planck import planck
 
 HOTTEST_FLAME = 3500.0
 """Temperature in K whose black-body radiance bounds a flame's emission: above the adiabatic

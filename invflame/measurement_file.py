@@ -39,7 +39,7 @@ warns about radiance no flame can have emitted (:mod:`invflame.measurement_check
 guide's page *Measurement files* shows how to write one by hand.
 
 **Masks.** ``radiance`` (and ``nesr`` or ``sigma``) may be NaN only where masked. In memory
-(:class:`~invflame.experiments.measurement.Measurement`), a masked value has ``sigma = inf`` —
+(:class:`~invflame.measurement.Measurement`), a masked value has ``sigma = inf`` —
 weight 0 in the data term (:func:`invflame.representations.whitening.noise_weights`) — and
 ``data = 0``; ``n_measurements`` counts only the others.
 """
@@ -56,9 +56,9 @@ import xarray as xr
 
 from invflame import __version__
 from invflame.atomic_files import read_netcdf, write_atomic
-from invflame.experiments.measurement import Measurement
 from invflame.geometry import CameraRig
 from invflame.geometry.rig_file import APODIZATIONS, parse_rig, rig_records
+from invflame.measurement import Measurement
 from invflame.measurement_checks import MeasurementReader, warn_implausible
 
 RADIANCE_UNITS = "W/(m2 sr cm-1)"

@@ -15,7 +15,7 @@ sub-rays spread over the pixel). The map is one JAX function around the emission
 that one function: :meth:`Scene.forward` (jitted, differentiable with ``jax.vjp``/``jax.grad``
 through the kernel's custom VJP), :meth:`Scene.simulate` (the fields checked, then
 :meth:`~Scene.forward`) and :attr:`Scene.operator`, the same function as an
-:class:`operators.Operator` (:class:`operators.emission_rte.KernelOperator`: jvp, vjp,
+:class:`operators.Operator` (:class:`operators.rte.operator.KernelOperator`: jvp, vjp,
 Jacobian, dot and Taylor tests). The pieces stay available as operators of their own
 (:attr:`Scene.sampling`, :attr:`Scene.emission`, :attr:`Scene.ils`) on the same tables.
 
@@ -28,11 +28,15 @@ With ``devices`` given, the map splits the rays over several devices
 (:func:`operators.sharding.shard_rays`): the fields stay replicated, each device measures its
 block of rays, and gradients are summed over the devices; the numbers agree with the
 one-device map to round-off. :meth:`Scene.forward` and :attr:`Scene.operator` both run so.
+
+A scene is built from one immutable :class:`~invflame.scene_settings.SceneSettings`
+(:attr:`Scene.settings`); :meth:`Scene.replace` builds a new scene from changed settings, so
+nothing the old one derived (rays, tables, operators, cached pieces) can go stale.
 """
 
 from __future__ import annotations
 
-import copy
+import dataclasses
 from functools import cached_property, partial
 
 import jax
@@ -43,47 +47,16 @@ from invflame.background import Background
 from invflame.errors import GeometryError
 from invflame.field import validate_values
 from invflame.geometry import CameraRig, RaySegments, VoxelGrid, paper_rig, traverse
+from invflame.scene_settings import SceneSettings
 from invflame.spectroscopy.absorption_table import AbsorptionTable
 from operators import ILSConvolution
-from operators.base import check_precision, precision
-from operators.emission_rte import EmissionRTE, KernelOperator, RTETables, batch_rays_for
+from operators.base import precision
 from operators.interop import to_jax, to_numpy
-from operators.rte_tables import rayleigh_soot_constant
+from operators.jax_precision import check_precision
+from operators.rte import EmissionRTE, KernelOperator, RTETables, batch_rays_for
+from operators.rte.tables import rayleigh_soot_constant
 from operators.sampling import VoxelSampling, sample_voxels
 from operators.sharding import place_rays, ray_mesh, replicate, shard_rays
-
-
-def _checked_soot(soot, grid: VoxelGrid) -> np.ndarray:
-    """A soot volume fraction field as float64, if its shape and values are usable."""
-    soot = np.asarray(soot, np.float64)
-    if soot.shape != grid.shape:
-        raise ValueError(f"soot must be a volume fraction per voxel of shape {grid.shape}, got "
-                         f"{soot.shape}")
-    if not (np.all(np.isfinite(soot)) and soot.min() >= 0 and soot.max() < 1):
-        raise ValueError(f"soot volume fractions must be finite and in [0, 1), got "
-                         f"{np.nanmin(soot):g} to {np.nanmax(soot):g}")
-    return soot
-
-
-def _soot_setting(soot, soot_input: bool, grid: VoxelGrid) -> tuple[np.ndarray | None, bool]:
-    """The known soot field (checked) and whether soot is an input field; not both."""
-    if soot is not None and soot_input:
-        raise ValueError("give either a known soot field (soot) or soot as an input field "
-                         "(soot_input=True), not both")
-    return (None if soot is None else _checked_soot(soot, grid)), bool(soot_input)
-
-
-def _window_slice(wavenumber: np.ndarray, window) -> slice:
-    if window is None:
-        return slice(None)
-    lo, hi = (float(w) for w in window)
-    inside = np.flatnonzero((wavenumber >= lo - 1e-9) & (wavenumber <= hi + 1e-9))
-    if inside.size < 2:
-        raise ValueError(
-            f"window {lo:g}-{hi:g} cm-1 holds fewer than 2 points of the table's grid "
-            f"{wavenumber[0]:g}-{wavenumber[-1]:g} cm-1"
-        )
-    return slice(int(inside[0]), int(inside[-1]) + 1)
 
 
 def _measure(radiance, rays_per_pixel, tables, voxel, lengths, camera, ils, shared, fields):
@@ -101,60 +74,31 @@ def _measure(radiance, rays_per_pixel, tables, voxel, lengths, camera, ils, shar
     return jnp.matmul(pixels, ils.T, precision=jax.lax.Precision.HIGHEST)
 
 
+_HANDED_ON = {"segments": {"grid", "rig", "rays_per_pixel"},
+              "tables": {"table", "window", "dtype", "planck", "soot", "soot_input",
+                         "soot_constant"}}
+"""The pieces :meth:`Scene.replace` hands on to the new scene, each with the settings it is
+computed from: a piece is handed on only when none of these settings changes."""
+
+
 class Scene:
     r"""Grid, cameras, spectroscopy and instrument of a flame-emission measurement.
 
     Parameters
     ----------
-    grid : VoxelGrid
-        Reconstruction grid (m).
-    rig : CameraRig
-        Cameras; their stacked pixels are the measurement rays.
-    table : AbsorptionTable
-        Cross-sections of (CO2, H2O, CH4) on the line-by-line grid (cm⁻¹) at one pressure
-        (Pa); its grid step is the line-by-line step.
-    resolution : float, optional
-        FTIR resolution :math:`1/\mathrm{MOPD}` in cm⁻¹ (default 8), see
-        :mod:`operators.ils`.
-    out_wavenumber : array_like, optional
-        Output grid in cm⁻¹ (default :func:`operators.ils.default_output_grid`).
-    window : (float, float), optional
-        Sub-window of the table's grid to use, in cm⁻¹ (default: all of it).
-    dtype : numpy dtype, optional
-        float32 (default, fast) or float64 (derivative checks).
-    planck : {"table", "exact"}, optional
-        Planck's law as a spline or exact, see :class:`operators.emission_rte.RTETables`.
-    memory_budget : int, optional
-        Bytes for one batch of rays in the emission kernel (default: per JAX backend).
-    batch_rays : int, optional
-        Rays per batch, overriding ``memory_budget``.
-    devices : int, sequence of jax.Device or jax.sharding.Mesh, optional
-        Split the rays of :meth:`forward` over these devices (see
-        :func:`operators.sharding.ray_mesh`; an int: the first ``n`` devices). Default
-        ``None``: one device, no sharding.
-    rays_per_pixel : int, optional
-        Sub-rays per pixel, ``k²`` for a ``k × k`` stratified subdivision of the pixel (default
-        1; :meth:`paper` and configurations use 9). A pixel's spectrum is the mean of its
-        sub-rays'; one ray per pixel leaves voxels between the pixels' centre rays unseen
-        (:func:`invflame.geometry.ray_coverage`).
-    background : invflame.background.Background, optional
-        What the cameras see behind the flame (a black-body wall, measured spectra per
-        camera); default None, no background.
-    soot : array_like, shape ``grid.shape``, optional
-        A known soot volume fraction per voxel (dimensionless, in [0, 1)), absorbing and
-        emitting the Rayleigh continuum :math:`C f_v \eta` beside the gas
-        (:mod:`operators.rte_tables`); default None, no soot. It is held fixed: the map's
-        input stays (T, mole fractions).
-    soot_constant : float, optional
-        The Rayleigh constant :math:`C` of the soot
-        (default :func:`operators.rte_tables.rayleigh_soot_constant`).
-    soot_input : bool, optional
-        True: the soot volume fraction is a fifth field of the map's input, after the mole
-        fractions (:attr:`field_shape` ``(5, nx, ny, nz)``), to be reconstructed; the map then
-        differentiates with respect to it too. Not with ``soot``. Default False.
+    grid, rig, table
+        The reconstruction grid, the cameras and the absorption table, see
+        :class:`~invflame.scene_settings.SceneSettings`.
+    **settings
+        The other settings by keyword (``resolution``, ``out_wavenumber``, ``window``,
+        ``dtype``, ``planck``, ``memory_budget``, ``batch_rays``, ``devices``,
+        ``rays_per_pixel``, ``background``, ``soot``, ``soot_constant``, ``soot_input``), as
+        there.
 
     Attributes
     ----------
+    settings : invflame.scene_settings.SceneSettings
+        What the scene is built from; the attributes below derive from it.
     segments : RaySegments
         Voxels and path lengths (m) of every sub-ray, ``n_rays · rays_per_pixel`` rows,
         pixel-major (the sub-rays of pixel ``p`` are rows ``p·rays_per_pixel`` onwards).
@@ -162,9 +106,9 @@ class Scene:
         Line-by-line grid in cm⁻¹.
     out_wavenumber : ndarray, shape (n_out,)
         Instrument output grid in cm⁻¹.
-    tables : operators.emission_rte.RTETables
+    tables : operators.rte.tables.RTETables
         The emission kernel's tables, prepared once for all of the scene's maps.
-    operator : operators.emission_rte.KernelOperator
+    operator : operators.rte.operator.KernelOperator
         The voxel forward map ``field_shape → data_shape`` as an operator: the function of
         :meth:`forward`, with its jvp, vjp and Jacobian.
     mesh : jax.sharding.Mesh or None
@@ -177,53 +121,84 @@ class Scene:
         Whether the soot volume fraction is the fifth field of the input.
     """
 
-    def __init__(self, grid: VoxelGrid, rig: CameraRig, table: AbsorptionTable,
-                 resolution: float = 8.0, out_wavenumber=None, window=None,
-                 dtype=np.float32, planck: str = "table", memory_budget: int | None = None,
-                 batch_rays: int | None = None, devices=None, rays_per_pixel: int = 1,
-                 background: Background | None = None, soot=None,
-                 soot_constant: float | None = None, soot_input: bool = False):
-        if not isinstance(grid, VoxelGrid):
-            raise TypeError(f"grid must be an invflame.geometry.VoxelGrid, got {type(grid)}")
-        if not isinstance(rig, CameraRig):
-            raise TypeError(f"rig must be an invflame.geometry.CameraRig, got {type(rig)}")
-        self.grid, self.rig, self.table = grid, rig, table
-        self.dtype = np.dtype(dtype)
-        self.planck = planck
-        self.memory_budget = memory_budget
-        self._band = _window_slice(table.wavenumber, window)
-        self.wavenumber = table.wavenumber[self._band]
-        self.rays_per_pixel = int(rays_per_pixel)
-        self.segments: RaySegments = traverse(grid, *rig.rays(rays_per_pixel))
-        if not self.segments.hit.any():
-            raise GeometryError(
-                f"no ray of the {rig.n_cameras} camera(s) crosses the grid {grid.lower.tolist()}"
-                f"-{grid.upper.tolist()} m: point the cameras at the grid (look_at its centre) "
-                "or widen their sensors")
-        self.ils = ILSConvolution(self.wavenumber, self.n_rays, resolution, out_wavenumber,
+    def __init__(self, grid: VoxelGrid, rig: CameraRig, table: AbsorptionTable, **settings):
+        self._assemble(SceneSettings(grid, rig, table, **settings), {})
+
+    def _assemble(self, settings: SceneSettings, handed_on: dict) -> None:
+        """Build the scene of ``settings``, taking the pieces in ``handed_on`` (see
+        :data:`_HANDED_ON`) as they are."""
+        self.settings = s = settings
+        self.grid, self.rig, self.table = s.grid, s.rig, s.table
+        self.dtype, self.planck, self.memory_budget = s.dtype, s.planck, s.memory_budget
+        self.rays_per_pixel, self.background = s.rays_per_pixel, s.background
+        self.soot, self.soot_input = s.soot, s.soot_input
+        self.wavenumber = s.table.wavenumber[s.band]
+        self.segments: RaySegments = (handed_on["segments"] if "segments" in handed_on
+                                      else self._traced())
+        self.ils = ILSConvolution(self.wavenumber, self.n_rays, s.resolution, s.out_wavenumber,
                                   dtype=self.dtype)
         self.out_wavenumber = self.ils.out_wavenumber
-        self.soot, self.soot_input = _soot_setting(soot, soot_input, grid)
-        self.tables = self._tables(soot_constant)
-        self.mesh = None if devices is None else ray_mesh(devices)
+        self.tables: RTETables = handed_on["tables"] if "tables" in handed_on else self._tables()
+        self.mesh = None if s.devices is None else ray_mesh(s.devices)
         n_traced = self.segments.n_rays
         rays_per_device = n_traced if self.mesh is None else -(-n_traced
                                                                // self.mesh.devices.size)
-        self.batch_rays = int(batch_rays or batch_rays_for(self.tables, rays_per_device,
-                                                           memory_budget))
-        if background is not None and not isinstance(background, Background):
-            raise TypeError(f"background must be an invflame.background.Background (e.g. "
-                            f"BlackbodyWall(T, emissivity)), got {type(background).__name__}")
-        self.background = background
+        self.batch_rays = int(s.batch_rays or batch_rays_for(self.tables, rays_per_device,
+                                                             s.memory_budget))
         self.operator = self._operator()
 
-    def _tables(self, soot_constant: float | None) -> RTETables:
+    def _tables(self) -> RTETables:
         """The kernel's tables on the scene's window, with a soot row when it has soot."""
-        sooty = self.soot is not None or self.soot_input
-        if sooty and soot_constant is None:
-            soot_constant = rayleigh_soot_constant()
-        return self.table.kernel_tables(self._band, self.dtype, self.planck,
-                                        soot=soot_constant if sooty else None)
+        s = self.settings
+        constant = rayleigh_soot_constant() if s.soot_constant is None else s.soot_constant
+        return s.table.kernel_tables(s.band, self.dtype, self.planck,
+                                     soot=constant if s.sooty else None)
+
+    def _traced(self) -> RaySegments:
+        """The segments of every sub-ray through the grid, if any ray crosses it."""
+        segments = traverse(self.grid, *self.rig.rays(self.rays_per_pixel))
+        if not segments.hit.any():
+            raise GeometryError(
+                f"no ray of the {self.rig.n_cameras} camera(s) crosses the grid "
+                f"{self.grid.lower.tolist()}-{self.grid.upper.tolist()} m: point the cameras "
+                "at the grid (look_at its centre) or widen their sensors")
+        return segments
+
+    def replace(self, **changes) -> Scene:
+        """A new scene of these settings with ``changes``; the traced rays and the kernel's
+        tables are shared with this scene when the settings they come from stay the same.
+
+        Parameters
+        ----------
+        **changes
+            New values of settings (see :class:`~invflame.scene_settings.SceneSettings`),
+            e.g. ``background=BlackbodyWall(300.0)`` or ``soot=None, soot_input=True``.
+
+        Raises
+        ------
+        TypeError
+            For a name that is not a setting.
+        """
+        names = {f.name for f in dataclasses.fields(SceneSettings) if f.init}
+        if unknown := sorted(set(changes) - names):
+            raise TypeError(f"Scene.replace: {unknown} are not settings of a scene; the "
+                            f"settings are {sorted(names)}")
+        scene = type(self).__new__(type(self))
+        scene._assemble(dataclasses.replace(self.settings, **changes),
+                        {piece: getattr(self, piece) for piece, needs in _HANDED_ON.items()
+                         if needs.isdisjoint(changes)})
+        return scene
+
+    def with_background(self, background: Background | None) -> Scene:
+        """:meth:`replace` with another ``background`` (None: none)."""
+        return self.replace(background=background)
+
+    def with_soot(self, soot, soot_constant: float | None = None,
+                  soot_input: bool = False) -> Scene:
+        """:meth:`replace` with another known ``soot`` field (None: none) or with
+        ``soot_input``, the soot volume fraction as a fifth input field, and
+        ``soot_constant``, as for :class:`~invflame.scene_settings.SceneSettings`."""
+        return self.replace(soot=soot, soot_constant=soot_constant, soot_input=soot_input)
 
     def _operator(self) -> KernelOperator:
         """The forward map on the scene's rays, tables, instrument and background."""
@@ -255,45 +230,6 @@ class Scene:
         sub_rays = np.diff(self.rig.ray_offsets) * self.rays_per_pixel
         return np.repeat(np.arange(self.rig.n_cameras), sub_rays)
 
-    def with_background(self, background: Background | None) -> Scene:
-        """The same scene (rays, tables, instrument, devices) in front of another background.
-
-        Parameters
-        ----------
-        background : invflame.background.Background or None
-            The new background (None: none).
-        """
-        if background is not None and not isinstance(background, Background):
-            raise TypeError(f"background must be an invflame.background.Background, got "
-                            f"{type(background).__name__}")
-        scene = copy.copy(self)
-        scene.__dict__.pop("emission", None)
-        scene.background = background
-        scene.operator = scene._operator()
-        return scene
-
-    def with_soot(self, soot, soot_constant: float | None = None,
-                  soot_input: bool = False) -> Scene:
-        """The same scene (rays, instrument, background, devices) with another known soot
-        field, or with the soot volume fraction as a fifth input field.
-
-        Parameters
-        ----------
-        soot : array_like, shape ``grid.shape``, or None
-            Soot volume fraction per voxel (dimensionless, in [0, 1)); None: no known soot.
-        soot_constant : float, optional
-            As for :class:`Scene`.
-        soot_input : bool, optional
-            As for :class:`Scene` (not with ``soot``).
-        """
-        scene = copy.copy(self)
-        for cached in ("emission", "sampling"):
-            scene.__dict__.pop(cached, None)
-        scene.soot, scene.soot_input = _soot_setting(soot, soot_input, self.grid)
-        scene.tables = scene._tables(soot_constant)
-        scene.operator = scene._operator()
-        return scene
-
     def _measurement(self, radiance):
         """The map ``(tables, voxel, lengths, camera, ils, shared, fields) -> spectra`` on the
         kernel ``radiance`` (:func:`_measure`), split over :attr:`mesh` when there is one."""
@@ -317,7 +253,7 @@ class Scene:
         rays_per_pixel : int, optional
             Sub-rays per pixel (default 9 = 3 × 3: with the pixel footprint about 2.9 voxels
             wide, every voxel is crossed; one ray per pixel leaves 46 % of the 60³ voxels
-            unseen, ``benchmarks/ray_coverage.py``).
+            unseen, ``studies/ray_coverage.py``).
         table : AbsorptionTable, optional
             Default :meth:`AbsorptionTable.default` (built once, then cached on disk).
         **kwargs
@@ -429,18 +365,14 @@ class Scene:
         Raises
         ------
         ValueError
-            For what :func:`invflame.field.validate_values` refuses (a wrong shape, NaN, T ≤ 0,
-            a mole fraction outside [0, 1], mole fractions summing above 1, a soot volume
-            fraction outside [0, 1)), for another number of fields than :attr:`field_shape`
-            and for a temperature outside the absorption table's range (K); the message names
-            the field and the offending values.
+            For what :func:`invflame.field.validate_values` refuses (a shape other than
+            :attr:`field_shape`, NaN, T ≤ 0, a mole fraction outside [0, 1], mole fractions
+            summing above 1, a soot volume fraction outside [0, 1)) and for a temperature
+            outside the absorption table's range (K); the message names the field and the
+            offending values.
         """
         fields = to_numpy(fields)
-        validate_values(fields, self.grid, mixture=mixture)
-        if fields.shape != self.field_shape:
-            soot = "with" if self.soot_input else "without"
-            raise ValueError(f"fields must have shape {self.field_shape} (a scene {soot} soot "
-                             f"as an input field), got {fields.shape}")
+        validate_values(fields, self.grid, mixture=mixture, soot=self.soot_input)
         self.tables.check_temperature(fields[0], "Scene")
         return fields
 

@@ -1,6 +1,8 @@
 """Matrix-free operators with derivatives, pylops-compatible when linear.
 
-Domain-agnostic: this package imports neither :mod:`solvers` nor :mod:`invflame`. Importing
+Domain-agnostic: this package imports neither :mod:`solvers` nor :mod:`invflame`, and the
+flame's radiative transfer has a subpackage of its own, :mod:`operators.rte`, whose
+operator, kernel and tables are exported here too. Importing
 it changes nothing in the process: it does not import torch (only building a
 :class:`TorchOperator` or importing the torch-specific modules does) and does not turn on JAX's
 64-bit mode; an operator of dtype float64 computes in float64 inside :func:`precision` only.
@@ -19,12 +21,6 @@ from operators.checks import (
 from operators.combinators import block_diag, vstack
 from operators.derivatives import D_x, D_y, D_z, Gradient, derivative
 from operators.diagonal import Diagonal
-from operators.emission_rte import (
-    EmissionRTE,
-    RTETables,
-    emission_radiance,
-    emission_radiance_jvp,
-)
 from operators.functionals import (
     L1,
     Composite,
@@ -35,7 +31,8 @@ from operators.functionals import (
 )
 from operators.ils import ILSConvolution
 from operators.norm import operator_norm
-from operators.planck import planck
+from operators.rte import EmissionRTE, RTETables, emission_radiance, emission_radiance_jvp
+from operators.rte.planck import planck
 from operators.sampling import VoxelSampling, sample_voxels
 from operators.tabulated import PiecewiseCubic
 

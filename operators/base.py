@@ -15,17 +15,16 @@ There is one way to write an operator, on arrays already shaped ``dims`` / ``dim
   ``A.H`` is the adjoint as an operator and ``A.adjoint(y)`` applies it.
 
 The algebra follows the chain rule: ``A @ B`` (composition, ``B`` applied first), ``A + B``,
-``A - B``, ``c * A``, ``-A``, ``A ** p``, ``A.T``, and the stacks
-:func:`~operators.combinators.vstack` and :func:`~operators.combinators.block_diag`
-(:mod:`operators.combinators`); every one returns an operator, linear when all its parts
-are, and linearizes each part once per point (:mod:`operators.algebra`).
+``A - B``, ``c * A``, ``-A``, ``A ** p``, ``A.T``, and the stacks :func:`~operators.vstack` and
+:func:`~operators.block_diag` (:mod:`operators.combinators`); every one returns an operator,
+linear when all its parts are, and linearizes each part once per point (:mod:`operators.algebra`).
 
 **Where the pieces live.** This module holds the base classes and the operators their own
 methods return: :class:`Jacobian`, :class:`Adjoint` and :class:`Identity`. The combinations
 (:mod:`operators.algebra`) and the wrappers of pylops operators and of JAX or torch functions
-(:mod:`operators.adapters`) subclass the base classes, so they import this module and never the
-reverse: they :func:`register` themselves here, and the methods build them through that
-registry, which also keeps them importable from here (``operators.base.Composition``).
+(:mod:`operators.adapters`) import this module and never the reverse: they :func:`register`
+themselves here, and the methods build them through that registry, which also keeps them
+importable from here (``operators.base.Composition``).
 
 **Shapes are checked.** An input must have the operator's shape (``dims`` for ``x`` and ``v``,
 ``dimsd`` for ``w``); a linear operator also takes the flat vector of as many elements, the
@@ -33,23 +32,19 @@ convention of pylops' ``matvec``. Anything else raises a ``ValueError`` naming t
 expected and the given shape; so does an implementation whose result has the wrong shape.
 
 **Precision.** An operator of dtype float64 evaluates (value, Jacobian products, adjoint and
-``linearize``, a subclass's own included) inside :func:`precision`, so that JAX computes in
-float64 there without turning on ``jax_enable_x64`` for the whole process.
+``linearize``, a subclass's own included) inside :func:`~operators.jax_precision.precision`.
 """
 
 from __future__ import annotations
 
-import contextlib
-import dataclasses
 import functools
 import numbers
 import types
-from collections.abc import Callable
-from typing import Any
 
-import jax
 import numpy as np
 
+from operators.jax_map import JaxMap
+from operators.jax_precision import precision
 from operators.pylops_import import pylops
 
 #: What :func:`register` received, by name.
@@ -83,70 +78,6 @@ def _shape(dims) -> tuple[int, ...]:
 
 def _size(shape) -> int:
     return int(np.prod(shape, dtype=np.int64))
-
-
-def precision(dtype):
-    """Context in which JAX computes in ``dtype``: float64 turns on x64 inside it only.
-
-    Parameters
-    ----------
-    dtype : numpy dtype
-        float64 enables JAX's 64-bit mode for the duration of the context; any other dtype
-        leaves the process setting as it is.
-    """
-    if np.dtype(dtype) == np.float64:
-        return jax.enable_x64(True)
-    return contextlib.nullcontext()
-
-
-def check_precision(dtype, what: str) -> None:
-    """Refuse to compute ``what`` in float64 where JAX would silently compute in float32.
-
-    Parameters
-    ----------
-    dtype : numpy dtype
-        The dtype ``what`` computes in.
-    what : str
-        Names the computation in the message.
-
-    Raises
-    ------
-    ValueError
-        For float64 while JAX's 64-bit mode is off here, saying how to turn it on.
-    """
-    if np.dtype(dtype) == np.float64 and not jax.config.jax_enable_x64:
-        raise ValueError(
-            f"{what} is float64, but JAX's 64-bit mode is off here, so JAX would compute in "
-            "float32: call it inside `with operators.precision(numpy.float64):` (the "
-            "operators' own methods do), or turn the mode on for the process with "
-            "jax.config.update('jax_enable_x64', True)")
-
-
-@dataclasses.dataclass(frozen=True)
-class JaxMap:
-    r"""An operator as a function that JAX can trace: :math:`y = F(x)` is
-    ``function(args, x)``.
-
-    Programs built of several operators (:mod:`solvers.compiled_objective`) call these inside
-    one :func:`jax.jit`, so that the whole program runs on JAX's device and JAX differentiates
-    it.
-
-    Attributes
-    ----------
-    function : callable
-        ``function(args, x) -> y``, traceable by JAX, ``x`` of the operator's ``dims`` and
-        ``y`` of its ``dimsd``.
-    args : pytree of jax.Array
-        The operator's constant arrays, passed at every call so that they are not compiled in
-        as constants.
-    check : callable or None
-        ``check(x)`` raises ``ValueError`` for a NumPy point ``x`` outside the operator's
-        domain, as the operator itself would; None when every point is in it.
-    """
-
-    function: Callable
-    args: Any = ()
-    check: Callable | None = None
 
 
 class Operator:

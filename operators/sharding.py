@@ -2,7 +2,7 @@ r"""Ray-parallel evaluation of ray-wise JAX kernels on several devices.
 
 A kernel is *ray-wise* when every output ray depends only on the same ray of its ray-wise
 inputs and on inputs shared by all rays (parameters, tables): the emission kernel
-:func:`operators.emission_rte.emission_radiance`, the voxel forward map of a scene, a neural
+:func:`operators.rte.kernel.emission_radiance`, the voxel forward map of a scene, a neural
 field rendered along rays. :func:`shard_rays` runs such a kernel with its rays cut into equal
 contiguous blocks, one per device of a one-axis :class:`jax.sharding.Mesh` (axis ``"rays"``),
 and the shared inputs replicated, through :func:`jax.shard_map`:
@@ -113,7 +113,7 @@ def shard_rays(kernel: Callable, ray_axes: Sequence[int | None], out_axes=0,
     Examples
     --------
     >>> from functools import partial
-    >>> from operators.emission_rte import emission_radiance
+    >>> from operators.rte import emission_radiance
     >>> radiance = shard_rays(partial(emission_radiance, batch_rays=64),
     ...                       ray_axes=(None, 1, 0))          # tables, fields, lengths
     >>> # radiance(tables, fields, lengths) has the rays of each device's block in parallel

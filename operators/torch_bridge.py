@@ -2,7 +2,7 @@
 
 :func:`torch_function` wraps ``fun(*arrays) -> array``, written in JAX, as a callable on torch
 tensors that torch autograd differentiates: the forward pass runs :func:`jax.vjp` (so a custom
-VJP of ``fun``, such as the memory-lean one of :func:`operators.emission_rte.emission_radiance`,
+VJP of ``fun``, such as the memory-lean one of :func:`operators.rte.kernel.emission_radiance`,
 keeps only its own residuals) and the backward pass calls the pullback it returned. Arrays
 cross between the frameworks through :mod:`operators.interop` (DLPack, no copy on CPU).
 

@@ -7,7 +7,7 @@
 #   plume_sheet1950_seed{1,2}.npz      McCaffrey plumes with an adiabatic flame sheet, puffing
 #                                       and turbulence of relative amplitude 0.3
 #
-# benchmarks/validation.py splits them into a tuning half and a report half. Needs OpenFOAM
+# studies/validation.py splits them into a tuning half and a report half. Needs OpenFOAM
 # (apt-get install -y openfoam openfoam-examples); about 25 min on 2 cores.
 # Usage: scripts/make_validation_family.sh [OUT]
 set -euo pipefail

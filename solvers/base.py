@@ -23,7 +23,7 @@ from solvers.checkpoint import load_run, save_run
 from solvers.history import History, Result
 from solvers.options import SolverOptions
 from solvers.problem import Evaluation, Problem
-from solvers.stopping import StoppingRule
+from solvers.stopping import StoppingRule, diverged
 
 
 class UnsupportedProblemError(ValueError):
@@ -261,7 +261,9 @@ class Solver:
 
         A step to non-finite parameters or loss is not taken, and a non-finite gradient at
         the new iterate ends the run there: the run stops with a reason starting
-        ``"non-finite"`` and keeps the last iterate whose parameters and loss are finite.
+        ``"non-finite"`` and keeps the last iterate whose parameters and loss are finite. A
+        step whose loss exceeds the start's a thousandfold (:func:`solvers.stopping.diverged`)
+        is not taken either: the run stops with a reason starting ``"diverged"``.
         """
         if not np.isfinite(run.current.loss):
             return (f"non-finite: the loss is {run.current.loss} at iteration {run.iteration}; "
@@ -282,6 +284,10 @@ class Solver:
             return (f"non-finite: {bad} at iteration {run.iteration + 1}; kept iteration "
                     f"{run.iteration}, the last finite one (lower the step size or learning "
                     "rate, or check the problem)")
+        rise = diverged(float(run.history["loss"][0]), float(step.evaluation.loss))
+        if rise:
+            return (f"diverged: {rise} at iteration {run.iteration + 1}; kept iteration "
+                    f"{run.iteration} (lower the step size or learning rate)")
         dx = float(np.linalg.norm(np.asarray(step.x, np.float64) - run.x))
         x_norm = float(np.linalg.norm(run.x))
         step_ratio = dx / x_norm if x_norm > 0 else (np.inf if dx > 0 else 0.0)

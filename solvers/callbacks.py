@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from tqdm import tqdm
+from solvers.progress import progress_bar
 
 
 class Callback:
@@ -56,7 +56,8 @@ class ProgressBar(Callback):
     desc : str, optional
         Label (default: the solver's name).
     **tqdm_kwargs
-        Passed to :func:`tqdm.tqdm` (e.g. ``disable=True``, ``file=...``).
+        Passed to :func:`solvers.progress.progress_bar` (e.g. ``disable=True``,
+        ``file=...``).
     """
 
     def __init__(self, desc: str | None = None, **tqdm_kwargs):
@@ -65,7 +66,7 @@ class ProgressBar(Callback):
         self.bar = None
 
     def on_start(self, run):
-        self.bar = tqdm(total=run.solver.stopping.max_iter, initial=run.iteration,
+        self.bar = progress_bar(total=run.solver.stopping.max_iter, initial=run.iteration,
                         desc=self.desc or run.solver.name, **self.tqdm_kwargs)
 
     def __call__(self, run):

@@ -64,6 +64,11 @@ CONVERGED = ("gtol:", "rtol_loss:", "rtol_x:", "converged:", "scipy L-BFGS-B: CO
 (:mod:`solvers.stopping`), a solver's own test, SciPy L-BFGS-B's convergence messages."""
 
 
+DIVERGED = ("diverged:", "non-finite:")
+"""Beginnings of the stop reasons of a diverged run: an objective risen a thousandfold
+(:func:`solvers.stopping.diverged`) or a non-finite one (:meth:`solvers.base.Solver.loop`)."""
+
+
 @dataclass(repr=False)
 class Result:
     """What a solver run returns.
@@ -113,6 +118,12 @@ class Result:
         """Whether the run stopped because a convergence test passed (:data:`CONVERGED`), not
         at a limit, on a failed line search, a non-finite value or a callback's request."""
         return self.stop_reason.startswith(CONVERGED)
+
+    @property
+    def diverged(self) -> bool:
+        """Whether the run stopped because its objective rose a thousandfold or became
+        non-finite (:data:`DIVERGED`)."""
+        return self.stop_reason.startswith(DIVERGED)
 
     def __repr__(self) -> str:
         return f"<Result {self}>"

@@ -4,6 +4,33 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
+DIVERGENCE = 1e3
+"""A step whose objective exceeds the start's by more than this many times the start's
+magnitude ends the run as diverged (:func:`diverged`) and keeps the iterate before. Above what
+the study's runs do: Adam's first step at the honest study's learning rate raises the
+objective of its networks 13- to 195-fold (``docs/validation.md``), and they go on from there;
+a learning rate of 1e30 on bounded voxels raises it further at once."""
+
+
+def diverged(start: float, loss: float) -> str | None:
+    """Why an objective ``loss`` tells a run diverged from its ``start``, or None.
+
+    Parameters
+    ----------
+    start, loss : float
+        The objective at the starting point and at a new iterate (loss units).
+
+    Returns
+    -------
+    str or None
+        A reason when ``loss - start`` exceeds :data:`DIVERGENCE` times ``|start|`` (a start
+        of 0 gives no scale: never).
+    """
+    if start != 0 and loss - start > DIVERGENCE * abs(start):
+        return (f"the loss rose from {start:.6g} at the start to {loss:.6g}, more than "
+                f"{DIVERGENCE:g} times its start")
+    return None
+
 
 def _check_tolerance(name, value):
     if value is not None and not value >= 0:

@@ -30,6 +30,12 @@ def shared_linedata() -> Path:
     return path
 
 
+@pytest.fixture(scope="session")
+def h2o_par() -> Path:
+    """The HITRAN2012 H₂O records of 600–800 cm⁻¹ that the package ships (its data folder)."""
+    return REPO / "invflame" / "data" / "H2O_HITRAN2012_600-800.par"
+
+
 @pytest.fixture
 def x64():
     """JAX's 64-bit mode on for the test: for float64 references computed in plain JAX, and

@@ -78,7 +78,8 @@ def main(argv: list[str] | None = None) -> int:
     except bad_input_errors() as err:  # evaluated only when the command raised
         if args.debug:
             raise
-        print(f"invflame {args.command}: error: {err}", file=sys.stderr)
+        for message in getattr(err, "messages", [err]):  # a configuration's errors: a line each
+            print(f"invflame {args.command}: error: {message}", file=sys.stderr)
         return 2
 
 

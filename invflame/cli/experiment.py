@@ -24,8 +24,11 @@ def add_parser(subparsers) -> None:
                      help="output folder (default results/run)")
     again = run.add_mutually_exclusive_group()
     again.add_argument("--resume", action="store_true",
-                       help="continue an interrupted run from its checkpoint; refused if the "
-                       "configuration, the truth, the measured data or the code changed since")
+                       help="continue an interrupted run from its checkpoint, or a finished "
+                       "one to a raised solver.iterations; refused if the configuration (but "
+                       "for a higher solver.iterations), the truth, the measured data or the "
+                       "code changed since, or if solver.iterations is below the iterations "
+                       "done")
     again.add_argument("--overwrite", action="store_true",
                        help="replace the run in --out (its results are deleted once the new "
                        "run's inputs have loaded), or write into a folder holding other files; "
@@ -88,6 +91,9 @@ def run_command(args: argparse.Namespace) -> int:
     check_run_target(args.out, resume=args.resume, overwrite=args.overwrite)
     summary = run_experiment(configuration.load(args.config), args.out, resume=args.resume,
                              progress=not args.quiet, force=args.force)
+    if summary.get("diverged"):
+        print(f"the solver diverged ({summary['stop_reason']}): the results hold the iterate "
+              "before; lower the step size or learning rate in solver.options")
     if "mse" in summary:  # scored against a ground truth
         comparison_figures(args.out, {"reconstruction": args.out})
         print(f"normalized MSE: {summary['mse']}; results in {args.out}")

@@ -70,7 +70,7 @@ def slab_radiance(table, temperature: float, mole_fractions, length: float) -> n
     """
     import numpy as np
 
-    from operators.planck import planck
+    from operators.rte.planck import planck
 
     kappa = table.kappa(np.asarray(temperature), np.asarray(mole_fractions, dtype=float))
     return planck(table.wavenumber, temperature) * -np.expm1(-kappa * length)
@@ -86,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
 
     from invflame.spectroscopy.absorption_table import AbsorptionTable
     from operators.ils import ILSConvolution
-    from operators.planck import planck
+    from operators.rte.planck import planck
 
     if args.x_co2 + args.x_h2o > 1.0:
         raise ConfigError(f"--x-co2 {args.x_co2:g} plus --x-h2o {args.x_h2o:g} exceed 1: mole "

@@ -190,7 +190,7 @@ def run(args: argparse.Namespace) -> int:
         params = [parse_param(text) for text in args.param]
         combos = combinations(configuration.load(args.config), params)
     except (ValueError, FileNotFoundError) as err:
-        print(f"invflame sweep: {err}", file=sys.stderr)
+        print(f"invflame sweep: error: {err}", file=sys.stderr)
         return 2
     jobs = [Job(c["label"], c["config"], args.out / c["name"]) for c in combos]
     workers = 1 if args.workers is None and args.scheduler is None else args.workers

@@ -21,7 +21,7 @@ scene, data as ``invflame study`` makes them) it took 42 simulations to find
 :math:`a` = 1.47 and :math:`h` = 1.54, against the truth's median :math:`h` of 1.52 (the
 relation's inverse over its gas with over 1 % of CO₂ + H₂O), and the misfit fell from
 χ²/M = 10 659 to 163 (``invflame study`` logs the numbers of each run; ``python
-benchmarks/fit_diagnosis.py`` scores both starts).
+studies/fit_diagnosis.py`` scores both starts).
 """
 
 from __future__ import annotations

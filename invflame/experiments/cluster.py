@@ -182,7 +182,8 @@ def run_jobs(client, jobs: Sequence[Job], resume: bool = False, retries: int = 1
         In the order of ``jobs``; failed runs carry their error, the others their summary.
     """
     from distributed import as_completed
-    from tqdm import tqdm
+
+    from solvers.progress import progress_bar
 
     folders = [Path(job.folder).resolve() for job in jobs]
     if len(set(folders)) != len(folders):
@@ -196,7 +197,7 @@ def run_jobs(client, jobs: Sequence[Job], resume: bool = False, retries: int = 1
         for i, (job, folder) in enumerate(zip(jobs, folders, strict=True))
     }
     outcomes: list[Outcome | None] = [None] * len(jobs)
-    bar = tqdm(total=len(jobs), desc="runs", unit="run", disable=not progress)
+    bar = progress_bar(total=len(jobs), desc="runs", unit="run", disable=not progress)
     for future in as_completed(futures):
         i = futures[future]
         outcomes[i] = _outcome(jobs[i], folders[i], future)

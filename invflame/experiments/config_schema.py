@@ -89,7 +89,9 @@ SCHEMA: dict[str, Key | Section] = {
         "max": Key(NUMBER, 725.0, "upper end of the window", "cm⁻¹"),
         "step": _positive(NUMBER, 0.04, "step of the line-by-line grid, at most half of "
                           "instrument.resolution", "cm⁻¹"),
-        "pressure": _positive(NUMBER, 101325.0, "total pressure of the gas", "Pa"),
+        "pressure": Key(NUMBER, 101325.0, "total pressure of the gas", "Pa", low=1e3,
+                        high=1e7, why="(1 kPa, a low-pressure flame, to 10 MPa, a high-pressure "
+                        "combustor: the Voigt lines without line mixing hold there)"),
         "broadening": Key(STRING, "local", "'local': each voxel's lines broadened and shifted "
                           "by its own H2O and CO2 fractions (the cross-sections tabulated on "
                           "self-fraction nodes); 'fixed': at X_CO2 = 0.1 and X_H2O = 0.2 "
@@ -134,7 +136,9 @@ SCHEMA: dict[str, Key | Section] = {
                     "of background.temperature and background.emissivity; 'file': measured "
                     "spectra per camera from background.file (see invflame.background)",
                     choices=("none", "blackbody", "file")),
-        "temperature": _positive(NUMBER, 300.0, "'blackbody': the wall's temperature", "K"),
+        "temperature": _positive(NUMBER, 300.0, "'blackbody': the wall's temperature", "K",
+                                 high=2500.0, why="(the absorption table's highest "
+                                 "temperature: a wall no hotter than the flame)"),
         "emissivity": Key(NUMBER, 1.0, "'blackbody': the wall's emissivity", low=0.0,
                           high=1.0, above=True),
         "file": Key(STRING, "", "'file': a NetCDF file of background spectra (a variable "
@@ -169,6 +173,11 @@ SCHEMA: dict[str, Key | Section] = {
                                     "(a stochastic objective)"),
         "pretrain_iterations": Key(INTEGER, 1000, "networks: iterations fitting the networks to "
                                    "the starting fields before the reconstruction", low=0.0),
+        "network_start": Key(STRING, "pretrained", "networks: 'pretrained': fitted to the "
+                             "starting fields (the paper's); 'offset': the networks' output adds "
+                             "to the starting fields' own values, interpolated between the voxel "
+                             "centres, and starts at zero, so they begin at the start exactly and "
+                             "learn its correction", choices=("pretrained", "offset")),
         "device": Key(STRING, "auto", "networks: torch's device for the networks, samples and "
                       "losses (made the process's default); 'auto': the first CUDA GPU when "
                       "JAX computes on a GPU and torch has CUDA, else the CPU",

@@ -25,20 +25,20 @@ measured relative to ambient air. The solve is
           \quad \Phi = \operatorname{mean} \|\nabla \varepsilon\|^2,
 
 with :math:`\sigma_{b,p}` the measurement noise propagated to the band integral, solved by
-projected accelerated gradient (:func:`band_tomography`). Four cameras on two axes give two
-independent directions; non-negativity is the prior that makes so few views usable: a pixel
-that sees nothing beyond ambient air forces every voxel on its path to zero. The weight
-:math:`\lambda` follows the discrepancy principle (:func:`solvers.discrepancy_principle`): the
-smoothest solution that fits the band data to the noise. The ambient air should be the one
-around the flame: assuming 1 % of water vapour in dry air leaves a misfit hundreds of times the
-noise at peak SNR 1000; the start then hardly changes, but the principle warns and takes its
-smallest weight.
+projected accelerated gradient (:func:`~invflame.experiments.linear_tomography.band_tomography`).
+Four cameras on two axes give two independent directions; non-negativity is the prior that
+makes so few views usable: a pixel that sees nothing beyond ambient air forces every voxel on
+its path to zero. The weight :math:`\lambda` follows the discrepancy principle
+(:func:`solvers.discrepancy_principle`): the smoothest solution that fits the band data to the
+noise. The ambient air should be the one around the flame: assuming 1 % of water vapour in dry
+air leaves a misfit hundreds of times the noise at peak SNR 1000; the start then hardly
+changes, but the principle warns and takes its smallest weight.
 
 **Channels.** Line cores that saturate make the band integral fall below the thin limit, most
 at the CO₂ ν₂ Q branch (667 cm⁻¹) in gas of a few hundred kelvin.
-:func:`thin_channels` keeps the channels where a column of every state of the state relation,
-as short as the brightest pixel allows, still emits at least :data:`THIN_RATIO` of its thin
-limit.
+:func:`~invflame.experiments.band_channels.thin_channels` keeps the channels where a column of
+every state of the state relation, as short as the brightest pixel allows, still emits at least
+:data:`~invflame.experiments.band_channels.THIN_RATIO` of its thin limit.
 
 **Masked values.** A bad wavenumber (masked in every pixel) leaves the channels; a pixel
 whose band then lacks a value, a bad pixel, contributes no row to the linear system:
@@ -57,58 +57,16 @@ represented).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
-import scipy.sparse
 
-import operators as op
-import solvers
+from invflame.experiments.band_channels import channel_emission, channel_weights, thin_channels
 from invflame.experiments.initialization import AMBIENT, with_soot_field
+
+# the smoothing weights the band tomography tries, importable from here too
+from invflame.experiments.linear_tomography import SMOOTHING_RANGE as SMOOTHING_RANGE
+from invflame.experiments.linear_tomography import band_tomography, pixel_path_lengths
 from invflame.representations.state_relation import DEFAULT_TEMPERATURE_RISE_ST, StateRelation
 from invflame.representations.whitening import noise_weights
-from operators.planck import planck
-
-SMOOTHING_RANGE = (1.0, 1e-7)
-"""Largest and smallest smoothing weight μ (dimensionless) the discrepancy principle tries."""
-
-DEFAULT_SMOOTHING = 3e-3
-"""Smoothing weight μ (dimensionless) when the noise is unknown: the discrepancy principle's
-choice on the synthetic plume at peak SNR 1000; the start changes little over a decade around
-it, because non-negativity, not the smoothing, shapes the solution."""
-
-THIN_RATIO = 0.6
-"""Least ratio of a channel's emission to its optically thin limit (see :func:`thin_channels`).
-
-On the synthetic plume at peak SNR 1000 it drops the four channels at the CO₂ Q branch and
-lowers the start's MSE_T by about 30 %; 0.7 drops eight channels with the same result."""
-
-
-def pixel_path_lengths(scene) -> scipy.sparse.csr_array:
-    """Path-length matrix of the pixels: each pixel's sub-ray lengths averaged.
-
-    Parameters
-    ----------
-    scene : invflame.scene.Scene
-        Its ``segments`` hold ``rays_per_pixel`` consecutive sub-rays per pixel (1 when the
-        scene has no such attribute).
-
-    Returns
-    -------
-    scipy.sparse.csr_array, shape (n_pixels, n_voxels)
-        Mean length in m of a pixel's sub-rays in each voxel (C-order voxel index).
-    """
-    group = int(getattr(scene, "rays_per_pixel", 1))
-    lengths = scene.segments.to_csr()
-    n_rays, n_voxels = lengths.shape
-    if group < 1 or n_rays % group:
-        raise ValueError(f"the scene traces {n_rays} sub-rays, not a multiple of its "
-                         f"rays_per_pixel = {group}")
-    n_pixels = n_rays // group
-    mean = scipy.sparse.csr_array(
-        (np.full(n_rays, 1.0 / group), (np.repeat(np.arange(n_pixels), group),
-                                        np.arange(n_rays))), shape=(n_pixels, n_rays))
-    return scipy.sparse.csr_array(mean @ lengths)
 
 
 def lean_branch(temperature_rise_st: float = DEFAULT_TEMPERATURE_RISE_ST, ambient=AMBIENT,
@@ -148,269 +106,6 @@ def lean_branch(temperature_rise_st: float = DEFAULT_TEMPERATURE_RISE_ST, ambien
     return relation.mixture_fraction(progress), np.stack(relation.states(progress))
 
 
-def channel_emission(scene, states, length: float | None = None) -> np.ndarray:
-    r"""Band emission of gas states per output channel, as the instrument sees it.
-
-    Thin limit (``length`` None): the emission density
-    :math:`\sum_i K_{ji}\, \kappa(\eta_i)\, B(\eta_i, T)` with :math:`K` the scene's
-    lineshape matrix (``scene.ils.matrix``), :math:`\kappa` from the scene's absorption table
-    and :math:`B` Planck's law. With ``length`` :math:`L`: the radiance of a uniform column of
-    that length per unit length, :math:`\sum_i K_{ji}\, B\,(1 - e^{-\kappa L}) / L`,
-    which self-absorption keeps below the thin limit.
-
-    Parameters
-    ----------
-    scene : invflame.scene.Scene
-        Absorption table, line-by-line window and instrument.
-    states : array_like, shape (4, n)
-        T in K (inside the table's range) and mole fractions of CO2, H2O, CH4.
-    length : float, optional
-        Column length in m (> 0).
-
-    Returns
-    -------
-    ndarray, shape (n, n_out)
-        W/(m³·sr·cm⁻¹).
-    """
-    states = np.asarray(states, dtype=np.float64)
-    if states.ndim != 2 or states.shape[0] != 4:
-        raise ValueError(f"states must have shape (4, n): T [K] and mole fractions of CO2, H2O, "
-                         f"CH4; got {states.shape}")
-    start = int(np.argmin(np.abs(scene.table.wavenumber - scene.wavenumber[0])))
-    columns = slice(start, start + scene.wavenumber.size)  # the scene's window in the table
-    kappa = scene.table.kappa(states[0], states[1:])[:, columns]  # m⁻¹
-    source = planck(scene.wavenumber[None, :], states[0][:, None])
-    if length is None:
-        spectrum = kappa * source
-    elif length > 0:
-        spectrum = -np.expm1(-kappa * length) * source / length
-    else:
-        raise ValueError(f"length must be positive (m), got {length}")
-    return spectrum @ np.asarray(scene.ils.matrix, np.float64).T
-
-
-def channel_weights(scene, channels=None) -> np.ndarray:
-    """Weights (cm⁻¹) of the output channels in the band integral: their widths, 0 if unused.
-
-    Parameters
-    ----------
-    scene : invflame.scene.Scene
-        Its output grid ``out_wavenumber`` (cm⁻¹).
-    channels : array_like of bool, shape (n_out,), optional
-        Channels to integrate over (default: all of them).
-
-    Returns
-    -------
-    ndarray, shape (n_out,)
-        Channel widths in cm⁻¹ (``numpy.gradient`` of the output grid) where selected.
-    """
-    out = np.asarray(scene.out_wavenumber, np.float64)
-    widths = np.gradient(out) if out.size > 1 else np.ones(1)
-    if channels is None:
-        return widths
-    channels = np.asarray(channels)
-    if channels.shape != out.shape or channels.dtype != bool:
-        raise ValueError(f"channels must be a boolean mask of shape {out.shape} (one per output "
-                         f"wavenumber), got dtype {channels.dtype} and shape {channels.shape}")
-    if not channels.any():
-        raise ValueError("channels selects no output wavenumber; select at least one")
-    return np.where(channels, widths, 0.0)
-
-
-def thin_channels(scene, band_peak: float, states,
-                  min_ratio: float = THIN_RATIO) -> np.ndarray:
-    """Output channels where the optically thin limit holds well enough for the flame seen.
-
-    The reference column is the shortest column of the hottest state of ``states`` (the last)
-    that gives the brightest pixel's band radiance ``band_peak`` (all channels, thin limit):
-    any flame seen is at least that thick. A channel is kept when, for every state, such a
-    column emits at least ``min_ratio`` of its thin-limit emission
-    (:func:`channel_emission`): line cores that saturate make the band integral, and hence
-    the tomography, underestimate the emission.
-
-    Parameters
-    ----------
-    scene : invflame.scene.Scene
-        Absorption table, window and instrument.
-    band_peak : float
-        Largest band radiance over the pixels beyond ambient air, all channels, W/(m²·sr).
-    states : array_like, shape (4, n)
-        States of the state relation, the hottest (stoichiometric) last.
-    min_ratio : float, optional
-        In (0, 1] (default :data:`THIN_RATIO`).
-
-    Returns
-    -------
-    ndarray of bool, shape (n_out,)
-        The channels kept; all of them when no pixel sees emission beyond ambient air, the
-        least saturated one when none reaches ``min_ratio``.
-    """
-    if not 0 < min_ratio <= 1:
-        raise ValueError(f"min_ratio must lie in (0, 1], got {min_ratio}")
-    thin = channel_emission(scene, states)
-    emitting = thin.sum(axis=1) > 0
-    peak = thin[-1] @ channel_weights(scene)
-    if not (band_peak > 0 and peak > 0):
-        return np.ones(scene.out_wavenumber.size, dtype=bool)
-    column = band_peak / peak  # m
-    thick = channel_emission(scene, np.asarray(states)[:, emitting], column)
-    ratio = thick / np.maximum(thin[emitting], np.finfo(float).tiny)
-    keep = ratio.min(axis=0) >= min_ratio
-    return keep if keep.any() else ratio.min(axis=0) == ratio.min(axis=0).max()
-
-
-@dataclass(frozen=True)
-class BandTomography:
-    r"""Result of :func:`band_tomography`.
-
-    Attributes
-    ----------
-    emission : ndarray, shape (nx, ny, nz)
-        Emission density beyond ambient air, W/(m³·sr), ≥ 0.
-    smoothing : float
-        The weight μ used (dimensionless, relative to :math:`\lambda_0`, see
-        :func:`band_tomography`).
-    chi2 : float
-        Misfit :math:`\chi^2` at the solution: whitened by the band noise when known
-        (≈ the number of pixels at the noise level), else the plain sum of squares in
-        (W/(m²·sr))².
-    choice : solvers.ParameterChoice or None
-        The discrepancy principle's sweep, when the noise was known.
-    """
-
-    emission: np.ndarray
-    smoothing: float
-    chi2: float
-    choice: solvers.ParameterChoice | None
-
-
-def _largest_eigenvalue(matrix, iterations: int = 30) -> float:
-    """Largest eigenvalue of ``matrix.T @ matrix`` for a non-negative sparse ``matrix``
-    (power iteration from the all-ones vector, which the Perron vector is close to)."""
-    x = np.ones(matrix.shape[1])
-    value = 0.0
-    for _ in range(iterations):
-        y = matrix.T @ (matrix @ x)
-        value = float(np.linalg.norm(y))
-        if value == 0.0:
-            raise ValueError("no pixel sees the grid: the path-length matrix is zero")
-        x = y / value
-    return value
-
-
-def band_tomography(lengths, band, grid, sigma_band=None, smoothing=None,
-                    max_iter: int = 5000, tol: float = 1e-5) -> BandTomography:
-    r"""Non-negative, smoothed linear emission tomography of band-integrated radiances.
-
-    Minimizes over the emission density :math:`\varepsilon \ge 0` (per voxel)
-
-    .. math:: J = \frac{1}{M}\sum_p \Big(\frac{(A\varepsilon)_p - b_p}{\sigma_{b,p}}\Big)^2
-              + \mu\,\lambda_0\, \operatorname{mean}|\nabla\varepsilon|^2,
-
-    with :math:`\nabla` forward differences per metre (:func:`operators.Gradient`) and
-    :math:`\lambda_0 = (\|A/\sigma_b\|^2/M) / (\|\nabla\|^2/N)` the ratio of the norms of
-    the two terms' Hessians (:math:`M` pixels, :math:`N` voxels), so that μ is dimensionless
-    and means the same on any grid. Each problem is solved by projected accelerated gradient
-    (FISTA, Beck & Teboulle, SIAM J. Imaging Sci. 2, 2009) with adaptive restart
-    (O'Donoghue & Candès, Found. Comput. Math. 15, 2015), warm-started from the solution of
-    the nearest weight tried.
-
-    With ``sigma_band`` given and ``smoothing`` None, μ follows the discrepancy principle
-    (:func:`solvers.discrepancy_principle`, τ = 1) over :data:`SMOOTHING_RANGE`: the
-    smoothest solution with :math:`\chi^2 \le M`. Without ``sigma_band`` the misfit is not
-    whitened and μ is :data:`DEFAULT_SMOOTHING`.
-
-    Parameters
-    ----------
-    lengths : scipy.sparse matrix, shape (M, N)
-        Path lengths in m of each pixel in each voxel (:func:`pixel_path_lengths`).
-    band : array_like, shape (M,)
-        Band-integrated radiance per pixel, W/(m²·sr).
-    grid : invflame.geometry.VoxelGrid
-        The grid of the N voxels (shape and spacing in m).
-    sigma_band : float or array_like, shape (M,), optional
-        Noise standard deviation of ``band`` in W/(m²·sr).
-    smoothing : float, optional
-        μ ≥ 0; overrides the rules above.
-    max_iter : int, optional
-        Iterations per solve at most.
-    tol : float, optional
-        A solve stops when an iteration changes ε by less than ``tol`` times its norm.
-
-    Returns
-    -------
-    BandTomography
-    """
-    lengths = scipy.sparse.csr_array(lengths, dtype=np.float64)
-    n_pixels, n_voxels = lengths.shape
-    if n_voxels != grid.n_voxels:
-        raise ValueError(f"lengths has {n_voxels} columns, the grid {grid.shape} has "
-                         f"{grid.n_voxels} voxels")
-    band = np.asarray(band, np.float64)
-    if band.shape != (n_pixels,) or not np.all(np.isfinite(band)):
-        raise ValueError(f"band must be {n_pixels} finite values (one per pixel, W/(m2 sr)), "
-                         f"got shape {band.shape}")
-    if sigma_band is None:
-        weight = np.ones(n_pixels)
-    else:
-        sigma_band = np.broadcast_to(np.asarray(sigma_band, np.float64), (n_pixels,))
-        if not np.all(np.isfinite(sigma_band) & (sigma_band > 0)):
-            raise ValueError("sigma_band must be positive and finite (W/(m2 sr))")
-        weight = 1.0 / sigma_band
-    if smoothing is not None and not (np.isfinite(smoothing) and smoothing >= 0):
-        raise ValueError(f"smoothing must be a finite number >= 0, got {smoothing}")
-
-    whitened = scipy.sparse.csr_array(scipy.sparse.diags_array(weight) @ lengths)
-    target = weight * band
-    gradient = op.Gradient((1, *grid.shape), grid.spacing)
-
-    data_norm = _largest_eigenvalue(whitened) / n_pixels
-    slope_norm = 4.0 * np.sum(1.0 / grid.spacing**2) / n_voxels  # bound on |D|^2 / N
-    lam0 = data_norm / slope_norm
-
-    def solve(mu, x0):
-        # step 1/L for the Lipschitz constant L of the gradient, with 5 % margin (the power
-        # iteration approaches the norm from below)
-        lam = mu * lam0
-        step = 1.0 / (2.1 * (data_norm + lam * slope_norm))
-        x = y = x0
-        momentum = 1.0
-        for _ in range(max_iter):
-            gradient_at_y = (2.0 * (whitened.T @ (whitened @ y - target)) / n_pixels
-                             + 2.0 * lam * gradient.rmatvec(gradient.matvec(y)) / n_voxels)
-            x_next = np.maximum(y - step * gradient_at_y, 0.0)
-            change = x_next - x
-            if (y - x_next) @ change > 0:  # momentum points uphill: restart
-                momentum = 1.0
-            momentum_next = 0.5 * (1.0 + np.sqrt(1.0 + 4.0 * momentum**2))
-            y = x_next + (momentum - 1.0) / momentum_next * change
-            x, momentum = x_next, momentum_next
-            if np.linalg.norm(change) <= tol * np.linalg.norm(x):
-                break
-        residual = whitened @ x - target
-        slope = gradient.matvec(x)
-        return x, float(residual @ residual), float(slope @ slope) / n_voxels
-
-    start = np.zeros(n_voxels)
-    if sigma_band is None or smoothing is not None:
-        mu = DEFAULT_SMOOTHING if smoothing is None else float(smoothing)
-        x, chi2, _ = solve(mu, start)
-        choice = None
-    else:
-        solved = {}
-
-        def warm_solve(mu):  # from the solution of the nearest weight tried so far
-            nearest = min(solved, key=lambda m: abs(np.log(m / mu)), default=None)
-            solved[mu] = solve(mu, start if nearest is None else solved[nearest][0])
-            return solved[mu]
-
-        choice = solvers.discrepancy_principle(warm_solve, n_pixels, *SMOOTHING_RANGE)
-        mu = choice.lam
-        x, chi2, _ = solved[mu]
-    return BandTomography(emission=np.maximum(x, 0.0).reshape(grid.shape), smoothing=mu,
-                          chi2=chi2, choice=choice)
-
-
 def band_tomography_start(scene, data, sigma=None,
                           temperature_rise_st: float = DEFAULT_TEMPERATURE_RISE_ST, *,
                           ambient=AMBIENT, channels=None, smoothing=None,
@@ -430,7 +125,7 @@ def band_tomography_start(scene, data, sigma=None,
         Noise standard deviation of ``data`` in W/(m²·sr·cm⁻¹): a scalar, one value per
         output wavenumber, or one per value; independent between values; ``inf`` for a
         masked value. Given, the smoothing follows the discrepancy principle; None (noise
-        unknown): the fixed :data:`DEFAULT_SMOOTHING`.
+        unknown): the fixed :data:`~invflame.experiments.linear_tomography.DEFAULT_SMOOTHING`.
     temperature_rise_st : float, optional
         Temperature rise in K at stoichiometry of the state relation (default
         :data:`~invflame.representations.state_relation.DEFAULT_TEMPERATURE_RISE_ST`);
@@ -441,10 +136,12 @@ def band_tomography_start(scene, data, sigma=None,
         :data:`~invflame.experiments.initialization.AMBIENT`). Its simulated spectra are
         subtracted from the data, and it is the cold end of the state relation.
     channels : array_like of bool, shape (n_out,), optional
-        Output channels of the band integral (default :func:`thin_channels`).
+        Output channels of the band integral (default
+        :func:`~invflame.experiments.band_channels.thin_channels`).
     smoothing : float, optional
-        Smoothing weight μ ≥ 0 (dimensionless, see :func:`band_tomography`), overriding the
-        rules above.
+        Smoothing weight μ ≥ 0 (dimensionless, see
+        :func:`~invflame.experiments.linear_tomography.band_tomography`), overriding the rules
+        above.
     n_states : int, optional
         States tabulated along the state relation (≥ 2).
     measured : array_like of bool, shape ``scene.data_shape``, optional

@@ -3,16 +3,23 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
-from invflame.experiments import config as configuration
+import numpy as np
+
+from invflame.errors import InputDataError
+from invflame.experiments.config_scene import line_by_line_grid, reconstruction_grid, rig_spec
 from invflame.field import Field
 from invflame.geometry import CameraRig, VoxelGrid, paper_rig
 from invflame.measurement_file import MeasurementFile, read_measurement
 from invflame.phantoms import make_phantom
 from invflame.phantoms.plume import plume_soot
 from invflame.spectroscopy.absorption_table import AbsorptionTable, default_linelists
-from invflame.spectroscopy.table_inputs import BROADENING
+from invflame.spectroscopy.table_inputs import BROADENING, DEFAULT_TEMPERATURES
+
+TEMPERATURE_RANGE = (float(DEFAULT_TEMPERATURES[0]), float(DEFAULT_TEMPERATURES[-1]))
+"""Lowest and highest temperature (K) of a run's absorption table, its temperature nodes'."""
 
 
 def absorption_table(cfg: dict, step: float | None = None,
@@ -30,7 +37,7 @@ def absorption_table(cfg: dict, step: float | None = None,
         Show a progress bar while a table is built.
     """
     spectrum = cfg["spectrum"]
-    wavenumber = configuration.line_by_line_grid(spectrum, step)
+    wavenumber = line_by_line_grid(spectrum, step)
     files = {"CO2": spectrum["co2_lines"], "H2O": spectrum["h2o_lines"]}
     return AbsorptionTable.cached(default_linelists(wavenumber, files), wavenumber=wavenumber,
                                   pressure=spectrum["pressure"],
@@ -44,7 +51,7 @@ def read_data(cfg: dict) -> MeasurementFile | None:
     source = cfg["data"]["source"]
     if not source:
         return None
-    spec = configuration.rig_spec(cfg)
+    spec = rig_spec(cfg)
     where = f"the rig file {cfg['rig']['file']}" if cfg["rig"]["file"] else "rig.cameras"
     return read_measurement(source, rig=None if spec is None else spec.rig, rig_source=where)
 
@@ -61,13 +68,13 @@ def scene_rig(cfg: dict, measured: MeasurementFile | None = None) -> CameraRig:
     measured : MeasurementFile, optional
         The run's measured data (:func:`read_data`).
     """
-    spec = configuration.rig_spec(cfg)
+    spec = rig_spec(cfg)
     if spec is not None:
         return spec.rig
     if measured is not None:
         return measured.rig
     rig = cfg["rig"]
-    return paper_rig(configuration.reconstruction_grid(cfg), distance=rig["distance"],
+    return paper_rig(reconstruction_grid(cfg), distance=rig["distance"],
                      n_pixels=rig["pixels"], focal_length=rig["focal_length"])
 
 
@@ -84,6 +91,16 @@ def load_truth(cfg: dict, grid: VoxelGrid | None = None) -> Field | None:
     grid : VoxelGrid, optional
         Resample onto this grid; default: the truth's native grid (the pool fire's 60³ cells,
         the synthetic plume's default 60³ grid, a file's own grid).
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``truth.source`` is neither a phantom's name nor an existing file.
+    InputDataError
+        If the file is not a field file (:meth:`invflame.field.Field.load`: 4 or 5 fields on a
+        3-D grid, finite, mole fractions in [0, 1]), stores complex numbers, or holds
+        temperatures outside the absorption table's (:data:`TEMPERATURE_RANGE`, K); the
+        message names the key and the file.
     """
     source = cfg["truth"]["source"]
     if source == "none":
@@ -91,13 +108,33 @@ def load_truth(cfg: dict, grid: VoxelGrid | None = None) -> Field | None:
     if source in ("poolfire", "synthetic"):
         field = make_phantom(source)
     else:
-        path = Path(source)
-        if not path.is_file():
-            raise FileNotFoundError(
-                f"truth.source {source!r} is neither 'poolfire', 'synthetic' nor an existing file"
-            )
-        field = Field.load(path)
+        field = _field_file(source)
     peak = cfg["truth"]["soot"]
     if peak > 0 and field.soot is None:
         field = field.with_soot(plume_soot(field, peak))
     return field if grid is None else field.resample(grid)
+
+
+def _field_file(source: str) -> Field:
+    """The field file of ``truth.source``, checked as :func:`load_truth` says."""
+    path = Path(source)
+    if not path.is_file():
+        raise FileNotFoundError(
+            f"'truth.source' = {source!r} is neither 'poolfire', 'synthetic', 'none' nor an "
+            "existing field file (.npz, see invflame.field)")
+    where = f"'truth.source' = {source!r}"
+    try:
+        with warnings.catch_warnings():  # a cast from complex would drop the imaginary parts
+            warnings.simplefilter("error", np.exceptions.ComplexWarning)
+            field = Field.load(path)
+    except np.exceptions.ComplexWarning:
+        raise InputDataError(f"{where} stores its fields as complex numbers: write them as real "
+                             "ones (T in K, mole fractions)") from None
+    except ValueError as err:  # a damaged file, another layout, values out of range
+        raise InputDataError(f"{where}: {err}") from err
+    low, high = TEMPERATURE_RANGE
+    t_min, t_max = float(field.T.min()), float(field.T.max())
+    if t_min < low or t_max > high:
+        raise InputDataError(f"{where} holds temperatures {t_min:g}-{t_max:g} K, outside the "
+                             f"absorption table's {low:g}-{high:g} K: give a truth within it")
+    return field

@@ -28,48 +28,18 @@ file), or a peak signal-to-noise ratio instead.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from invflame.field import Field
+from invflame.measurement import Measurement
 from invflame.representations.whitening import noise_weights
 from invflame.scene import Scene
 from invflame.spectroscopy.absorption_table import AbsorptionTable
 
 DEFAULT_NESR = 1e-3
 """Default noise-equivalent spectral radiance in W/(m²·sr·cm⁻¹) (see the module docstring)."""
-
-
-@dataclass(frozen=True)
-class Measurement:
-    """Measured spectra and their noise.
-
-    Attributes
-    ----------
-    data : ndarray, shape (n_rays, n_out)
-        Spectra per pixel in W/(m²·sr·cm⁻¹) (0 where masked).
-    sigma : ndarray, shape (n_out,) or (n_rays, n_out)
-        Noise standard deviation per output wavenumber, or per value, in W/(m²·sr·cm⁻¹)
-        (ones for noise-free data, so that a whitened misfit is the plain sum of squares);
-        ``inf`` for a masked value (a bad pixel or wavenumber: weight 0 in the data term, see
-        :mod:`invflame.measurement_file`).
-    noisy : bool
-        Whether noise was added (False: ``sigma`` carries no information).
-    provenance : dict
-        How the data were made (grid, sub-rays, step, noise).
-    """
-
-    data: np.ndarray
-    sigma: np.ndarray
-    noisy: bool
-    provenance: dict
-
-    @property
-    def n_measurements(self) -> int:
-        """Number of measured values M (pixels × output wavenumbers), masked ones left out."""
-        return int(np.count_nonzero(np.isfinite(np.broadcast_to(self.sigma, self.data.shape))))
 
 
 def read_nesr(path, out_wavenumber) -> np.ndarray:

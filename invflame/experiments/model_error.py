@@ -32,9 +32,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from invflame.experiments.inputs import absorption_table
-from invflame.experiments.measurement import Measurement, synthesis_scene
+from invflame.experiments.measurement import synthesis_scene
 from invflame.field import Field
 from invflame.geometry import VoxelGrid
+from invflame.measurement import Measurement
 from invflame.phantoms import synthetic_plume
 from invflame.scene import Scene
 

@@ -80,12 +80,14 @@ def make_representation(cfg: dict, scene: Scene):
 
 
 def starting_parameters(cfg: dict, representation, start: np.ndarray, progress: bool):
-    """Parameters of the starting fields: normalized voxels, or networks pretrained on them."""
+    """Parameters of the starting fields: normalized voxels, or networks pretrained on them or
+    offset by them (``representation.network_start``)."""
     if representation.kind == "voxel":
         return representation.initial_parameters(start)
+    settings = cfg["representation"]
     return representation.initial_parameters(
-        start, iterations=cfg["representation"]["pretrain_iterations"], seed=cfg["seed"],
-        progress=progress)
+        start, iterations=settings["pretrain_iterations"], seed=cfg["seed"], progress=progress,
+        offset=settings["network_start"] == "offset")
 
 
 def physical_fields(scene: Scene, fields: np.ndarray) -> np.ndarray:

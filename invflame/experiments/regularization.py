@@ -8,8 +8,8 @@ from pathlib import Path
 import solvers
 from invflame.atomic_files import write_json
 from invflame.errors import ConfigError
-from invflame.experiments.measurement import Measurement
 from invflame.experiments.model_error import estimate_model_error
+from invflame.measurement import Measurement
 from invflame.scene import Scene
 
 

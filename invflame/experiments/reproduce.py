@@ -90,11 +90,11 @@ HONEST_LAMBDA = {
 }
 r"""Fixed λ of the honest protocol per representation and regularizer, on the noise-weighted
 scale (:math:`\chi^2/M + \lambda\Phi`), chosen on the tuning half of the validation family
-and never on a flame the study reports on (``benchmarks/validation.py``,
+and never on a flame the study reports on (``studies/validation.py``,
 ``docs/validation.md``). Voxels, with the state relation and the calibrated start: the λ of
 the sweeps 30, 100, 300 (Tikhonov) and 10, 30, 100, 300 (TV) with the largest geometric mean
 of the gain over the start on the pool fire's LES at t = 1.2 and 2 s (``python
-benchmarks/lambda_sweep.py --truth runs/validation/poolfire_u0.01_t1.2.npz --method VG/Tikh.
+studies/lambda_sweep.py --truth runs/validation/poolfire_u0.01_t1.2.npz --method VG/Tikh.
 --lambdas 30 100 300``, and the same for the other flame and for VG/TV). Networks: TV's the
 best of a voxel sweep on the synthetic plume, Tikhonov's making :math:`\lambda\Phi` of the
 plume's true fields of TV's order (a network trained once per trial λ is more than the quick
@@ -117,7 +117,7 @@ networks encode position with 10 frequencies; the honest ones with the default 4
 2³ periods over the box, stays coarser than the voxels they are scored on; with 10 the
 fitted network's values at the voxel centres alias its finer structure (on the tuning flame
 ``poolfire_u0.01_t1.2``, NN/Tikh.: MSE_T 0.0347 against its start's 0.0072 with 10, 0.0081
-against 0.0066 with 4; ``python benchmarks/lambda_sweep.py --truth
+against 0.0066 with 4; ``python studies/lambda_sweep.py --truth
 runs/validation/poolfire_u0.01_t1.2.npz --method NN/Tikh. --lambdas 1 --set
 representation.frequencies=4``)."""
 

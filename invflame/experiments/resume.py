@@ -1,5 +1,7 @@
 """Resuming a run folder safely: refuse one written under another configuration, truth,
-data or code (:func:`check_resumable`, :func:`check_fingerprint`), unless forced."""
+data or code (:func:`check_resumable`, :func:`check_fingerprint`), unless forced; continue a
+finished run to a raised iteration limit (:func:`continues_finished_run`) and refuse a limit
+below the iterations already done (:func:`resumed_from`)."""
 
 from __future__ import annotations
 
@@ -13,12 +15,12 @@ import invflame
 import solvers
 from invflame.atomic_files import read_json
 from invflame.experiments import config as configuration
-from invflame.experiments.measurement import Measurement
 from invflame.experiments.run_folder import CHECKPOINT, FINGERPRINT, SUMMARY
 from invflame.field import Field
+from invflame.measurement import Measurement
 
 __all__ = ["FINGERPRINT", "FORCE_HINT", "check_fingerprint", "check_resumable",
-           "run_fingerprint"]
+           "continues_finished_run", "resumed_from", "run_fingerprint"]
 
 FORCE_HINT = "; --force (invflame run --resume --force) continues anyway and records it"
 
@@ -66,6 +68,81 @@ def check_resumable(cfg: dict, folder, force: bool = False) -> list[str]:
                if not d.startswith("solver.iterations:")]
     return _refuse_unless_forced(folder, changed, force, "it was run with another configuration",
                                  "the same configuration")
+
+
+def _below_done(folder, done: float, limit: int) -> configuration.ConfigError:
+    """The refusal of a limit of ``limit`` epochs for a run that did ``done``."""
+    return configuration.ConfigError(
+        f"cannot resume {Path(folder)}: it has done {done:g} epochs, but 'solver.iterations' "
+        f"= {limit} now stops it before them: set solver.iterations to at least {done:g} "
+        "(higher continues the run), or start a new folder (invflame run --overwrite)")
+
+
+def continues_finished_run(cfg: dict, folder) -> bool:
+    """Whether resuming the finished run in ``folder`` continues it: its solver stopped at its
+    iteration limit and ``solver.iterations`` is now higher. Otherwise its result stands (the
+    same limit, or a stop before the limit by another rule, where a run with the new limit
+    would have stopped too).
+
+    Parameters
+    ----------
+    cfg : dict
+        Validated configuration of the resumed run.
+    folder : str or Path
+        The run folder, holding ``summary.json``.
+
+    Raises
+    ------
+    ConfigError
+        If ``solver.iterations`` is below the epochs the run did, or the run is to continue
+        but its checkpoint is gone.
+    """
+    summary = read_json(Path(folder) / SUMMARY)
+    done, limit = summary["epochs"], cfg["solver"]["iterations"]
+    if limit < done:
+        raise _below_done(folder, done, limit)
+    if not (limit > done and summary["stop_reason"].startswith("max_iter:")):
+        return False
+    if not (Path(folder) / CHECKPOINT).is_file():
+        raise configuration.ConfigError(
+            f"cannot continue {Path(folder)} to 'solver.iterations' = {limit}: its "
+            f"{CHECKPOINT} is gone; start a new folder (invflame run --overwrite)")
+    return True
+
+
+def resumed_from(cfg: dict, folder, per_epoch: int, changed: list[str]) -> dict:
+    """What a run resumed from the checkpoint in ``folder`` records in its summary.
+
+    Parameters
+    ----------
+    cfg : dict
+        Validated configuration of the resumed run.
+    folder : str or Path
+        The run folder, holding the checkpoint.
+    per_epoch : int
+        Solver iterations per epoch of the run's representation.
+    changed : list of str
+        What changed since the folder was written (:func:`check_resumable`,
+        :func:`check_fingerprint`), resumed anyway with ``force``.
+
+    Returns
+    -------
+    dict
+        ``from_iteration`` (the checkpoint's solver iteration), ``exact`` (whether the solver
+        resumes exactly), ``forced`` and ``changed``.
+
+    Raises
+    ------
+    ConfigError
+        If ``solver.iterations`` is below the epochs of the checkpoint (the run would stop at
+        once, past its own limit).
+    """
+    solver = cfg["solver"]
+    done = solvers.load_checkpoint(Path(folder) / CHECKPOINT).meta["iteration"]
+    if done > solver["iterations"] * per_epoch:
+        raise _below_done(folder, done / per_epoch, solver["iterations"])
+    return {"from_iteration": done, "exact": solvers.get(solver["name"]).exact_resume,
+            "forced": bool(changed), "changed": changed}
 
 
 def _content_hash(*arrays) -> str:

@@ -26,9 +26,11 @@ r"""One reconstruction from a configuration: scene, data, representation, solver
 ====================== ======================================================================
 
 All files are written atomically. A finished run (``summary.json`` present) is not redone with
-``resume=True``; an interrupted one continues from its checkpoint, unless its configuration,
-truth, data or code changed (:func:`check_resumable`, :func:`check_fingerprint`; ``force=True``
-continues anyway and records it). While a run writes its folder, the folder is locked
+``resume=True`` unless it stopped at its iteration limit and ``solver.iterations`` is now
+higher (it then continues; a limit below the iterations done is refused,
+:func:`continues_finished_run`); an interrupted one continues from its checkpoint, unless its
+configuration, truth, data or code changed (:func:`check_resumable`, :func:`check_fingerprint`;
+``force=True`` continues anyway and records it). While a run writes its folder, the folder is locked
 (``.lock``, a second writer is refused) and holds ``INCOMPLETE``, removed when every output is
 written (:mod:`invflame.experiments.run_folder`).
 
@@ -57,15 +59,11 @@ import numpy as np
 
 import solvers
 from invflame.atomic_files import read_json, write_csv, write_json, write_npz, write_text
-from invflame.background import background_from_config
+from invflame.background_file import background_from_config
 from invflame.experiments import config as configuration
 from invflame.experiments.inputs import absorption_table, load_truth, read_data, scene_rig
 from invflame.experiments.machine import describe_machine, in_words
-from invflame.experiments.measurement import (
-    Measurement,
-    simulate_measurement,
-    synthesis_scene,
-)
+from invflame.experiments.measurement import simulate_measurement, synthesis_scene
 from invflame.experiments.metrics import peak_memory_mb
 from invflame.experiments.parameters import (
     make_representation,
@@ -78,6 +76,8 @@ from invflame.experiments.resume import (
     FORCE_HINT,
     check_fingerprint,
     check_resumable,
+    continues_finished_run,
+    resumed_from,
     run_fingerprint,
 )
 from invflame.experiments.run_folder import CHECKPOINT, SUMMARY, RunLock
@@ -92,6 +92,7 @@ from invflame.export import export_run
 from invflame.field import Field
 from invflame.geometry import VoxelGrid, ray_coverage
 from invflame.geometry.rig_file import check_instrument
+from invflame.measurement import Measurement
 from invflame.measurement_file import MeasurementFile
 from invflame.scene import Scene
 from invflame.spectroscopy.absorption_table import AbsorptionTable
@@ -126,7 +127,7 @@ def build_scene(cfg: dict, table: AbsorptionTable | None = None,
                 measured: MeasurementFile | None = None, progress: bool = True) -> Scene:
     """The reconstruction scene of a configuration: grid (``[grid]``,
     :func:`invflame.experiments.config.reconstruction_grid`), rig, sub-rays, table,
-    instrument, background (``[background]``, :func:`invflame.background.background_from_config`)
+    instrument, background (``[background]``, :func:`.background_from_config`)
     and, with ``soot.reconstruct``, the soot volume fraction as a fifth input field.
 
     Parameters
@@ -226,7 +227,8 @@ def run_experiment(cfg: dict, out_dir, resume: bool = False, progress: bool = Tr
     out_dir : str or Path
         Output folder (created).
     resume : bool, optional
-        Continue an interrupted run from its checkpoint; a finished one is returned as is.
+        Continue an interrupted run from its checkpoint; a finished one is returned as is,
+        or continued to a raised ``solver.iterations``.
     progress : bool, optional
         Show a progress bar and echo the log.
     table : AbsorptionTable, optional
@@ -272,7 +274,9 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
         # finished: simulated data follow from the configuration, truth and code checked here
         given = measurement if measured is None else measured.measurement
         check_fingerprint(out, run_fingerprint(cfg, truth, given), force)
-        return read_json(summary_path)
+        if not continues_finished_run(cfg, out):
+            return read_json(summary_path)
+        summary_path.unlink()  # continued to the raised iteration limit
     if not resume:
         for stale in (summary_path, checkpoint, out / "log.txt", out / "lambda_choice.json",
                       out / FINGERPRINT):
@@ -331,10 +335,7 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
     if progress:
         callbacks.append(solvers.ProgressBar(desc=out.name))
     resume_from = checkpoint if resume and checkpoint.is_file() else None
-    resumed = None if resume_from is None else {
-        "from_iteration": solvers.load_checkpoint(checkpoint).meta["iteration"],
-        "exact": solvers.get(solver["name"]).exact_resume, "forced": bool(changed),
-        "changed": changed}
+    resumed = None if resume_from is None else resumed_from(cfg, out, per_epoch, changed)
     log(f"solver {solver['name']} for at most {solver['iterations']} epochs"
         + (f" ({per_epoch} iterations each)" if per_epoch > 1 else "")
         + (f", resuming from {checkpoint.name}" if resume_from else ""))
@@ -366,6 +367,7 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
         "epochs": result.iterations / per_epoch,
         "stop_reason": result.stop_reason,
         "converged": result.converged,
+        "diverged": result.diverged,
         "loss": {"initial": history["loss"][0], "final": result.loss},
         "chi2_per_measurement": {"initial": chi2_per_value(scene.simulate(start), measurement),
                                  "final": chi2_per_value(simulated, measurement)},

@@ -8,9 +8,9 @@ import numpy as np
 from invflame.experiments.calibration import calibrate_start
 from invflame.experiments.data_start import band_tomography_start
 from invflame.experiments.initialization import ambient, noisy_truth, with_soot_field
-from invflame.experiments.measurement import Measurement
 from invflame.experiments.parameters import state_relation
 from invflame.field import Field
+from invflame.measurement import Measurement
 from invflame.scene import Scene
 
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from invflame.experiments.measurement import Measurement
 from invflame.experiments.metrics import field_scores, psnr
+from invflame.measurement import Measurement
 
 
 def protocol(cfg: dict, measurement: Measurement) -> dict[str, str]:

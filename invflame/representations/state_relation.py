@@ -55,7 +55,7 @@ DEFAULT_FACTOR_RANGE = (0.3, 2.0)
 """Bounds of the temperature factor :math:`h` (dimensionless). The packaged OpenFOAM pool fire
 holds :math:`h` = 1.27–1.75 (5th–95th percentile over its gas with over 1 % of CO₂ + H₂O,
 against the default rise of 1500 K: :meth:`StateRelation.invert` of its 60³ field; median
-1.52 on the 30³ grid, ``python benchmarks/fit_diagnosis.py``); 0.3 lets a strongly radiating or
+1.52 on the 30³ grid, ``python studies/fit_diagnosis.py``); 0.3 lets a strongly radiating or
 diluted gas reach a third of the rise."""
 
 

@@ -1,17 +1,13 @@
-r"""Absorption cross-sections tabulated in temperature, and the absorption coefficient.
+r"""Absorption cross-sections tabulated in temperature and self fraction.
 
 :class:`AbsorptionTable` holds :math:`\sigma_s(\eta, T, X_s)` (cm²/molecule) for the species
 CO2, H2O, CH4 on temperature nodes at one pressure and, per species, on nodes of its own mole
 fraction :math:`X_s` (its lines are broadened and shifted by its own molecules otherwise than by
 air); the cubic spline in T through them (:class:`operators.tabulated.PiecewiseCubic`) and
 linear interpolation in :math:`X_s` between the fraction nodes give the cross-section of any
-state, as the emission operator evaluates it. From it,
-
-.. math:: \kappa(\eta) = \sum_s X_s\, N\, \sigma_s(\eta, T, X_s) \cdot 10^{-4},
-          \qquad N = \frac{p}{k_B T}\ [\mathrm{m}^{-3}],
-
-in m⁻¹ (the factor converts cm² to m²). A species given one fraction node has the
-cross-section of that fraction whatever the gas holds (the broadening ``"fixed"``,
+state, as the emission operator evaluates it, and from it the absorption coefficient κ in m⁻¹
+(:mod:`~invflame.spectroscopy.absorption_coefficient`). A species given one fraction node has
+the cross-section of that fraction whatever the gas holds (the broadening ``"fixed"``,
 :data:`~invflame.spectroscopy.table_inputs.FIXED_SELF_FRACTION`).
 """
 
@@ -21,10 +17,10 @@ import logging
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import constants
 
 from invflame.atomic_files import CorruptFileError
 from invflame.errors import InputDataError
+from invflame.spectroscopy.absorption_coefficient import AbsorptionCoefficient
 from invflame.spectroscopy.cross_section import grid_step
 from invflame.spectroscopy.line_parameters import ATM
 from invflame.spectroscopy.spectral_points import MAX_POINTS_PER_BIN
@@ -39,9 +35,7 @@ from invflame.spectroscopy.table_inputs import (
     tabulate,
 )
 from operators.disk_cache import cache_dir
-from operators.planck import planck
-from operators.rte_blocks import interpolate_fraction
-from operators.rte_tables import RTETables
+from operators.rte.tables import RTETables
 from operators.tabulated import PiecewiseCubic
 
 __all__ = ["DEFAULT_SELF_FRACTION", "DEFAULT_TEMPERATURES", "SPECIES", "AbsorptionTable",
@@ -51,7 +45,7 @@ logger = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True, eq=False)
-class AbsorptionTable:
+class AbsorptionTable(AbsorptionCoefficient):
     r"""Cross-sections :math:`\sigma_s(\eta, T, X_s)` on temperature and self-fraction nodes,
     with their T spline.
 
@@ -315,7 +309,7 @@ class AbsorptionTable:
 
     def kernel_tables(self, band: slice = slice(None), dtype=np.float32, planck: str = "table",
                       soot: float | None = None) -> RTETables:
-        """The emission kernel's tables (:meth:`operators.rte_tables.RTETables.from_spline`)
+        """The emission kernel's tables (:meth:`operators.rte.tables.RTETables.from_spline`)
         of this table's cross-sections over the bins ``band``.
 
         Parameters
@@ -335,79 +329,3 @@ class AbsorptionTable:
                                      table.pressure, dtype, planck, soot=soot,
                                      fraction_nodes=table.self_fraction,
                                      point_bin=table.point_bin)
-
-    # ------------------------------------------------------------------ physics
-
-    def _check_state(self, temperature, mole_fractions, pressure):
-        temperature = np.asarray(temperature, dtype=np.float64)
-        mole_fractions = np.asarray(mole_fractions, dtype=np.float64)
-        lo, hi = self.temperatures[[0, -1]]
-        if np.any(temperature < lo) or np.any(temperature > hi) or np.isnan(temperature).any():
-            raise ValueError(
-                f"temperature outside the table range {lo:g}-{hi:g} K: "
-                f"got {np.nanmin(temperature):g}-{np.nanmax(temperature):g} K"
-            )
-        if mole_fractions.shape != (len(self.species),) + temperature.shape:
-            raise ValueError(
-                f"mole fractions must have shape (n_species,) + T.shape = "
-                f"{(len(self.species),) + temperature.shape} (species {self.species}), "
-                f"got {mole_fractions.shape}"
-            )
-        pressure = self.pressure if pressure is None else float(pressure)
-        if abs(pressure / self.pressure - 1.0) > 0.01:
-            raise ValueError(
-                f"the table was broadened at {self.pressure:g} Pa, asked for {pressure:g} Pa: "
-                "build a table at that pressure"
-            )
-        return temperature, mole_fractions, pressure
-
-    def cross_sections(self, temperature, mole_fractions) -> np.ndarray:
-        """Cross-sections of each species in cm²/molecule, shape ``s + (n_species, n_eta)``:
-        the T spline, and linear interpolation in each species' own mole fraction between
-        its fraction nodes. Arguments as :meth:`kappa`."""
-        temperature, mole_fractions, _ = self._check_state(temperature, mole_fractions, None)
-        columns = self.spline(temperature)  # s + (n_columns, n_eta)
-        sigma = np.empty(temperature.shape + (len(self.species), self.wavenumber.size))
-        for j, nodes in enumerate(self.self_fraction):
-            own = self.bin_average(columns[..., self.columns(j), :])
-            sigma[..., j, :] = interpolate_fraction(own, nodes, mole_fractions[j])
-        return sigma
-
-    def kappa(self, temperature, mole_fractions, pressure: float | None = None) -> np.ndarray:
-        """Absorption coefficient κ_η in m⁻¹.
-
-        Parameters
-        ----------
-        temperature : array_like, shape s
-            K, inside the table's node range.
-        mole_fractions : array_like, shape (n_species,) + s
-            Mole fractions in the order of :attr:`species` (species-first, like the field
-            arrays).
-        pressure : float, optional
-            Pa; defaults to, and must be within 1 % of, the table's pressure (the line shapes
-            are those of the table's pressure).
-
-        Returns
-        -------
-        ndarray, shape s + (n_eta,)
-        """
-        temperature, mole_fractions, pressure = self._check_state(
-            temperature, mole_fractions, pressure
-        )
-        number_density = pressure / (constants.k * temperature)  # m⁻³
-        sigma = self.cross_sections(temperature, mole_fractions)  # s + (n_species, n_eta), cm²
-        x = np.moveaxis(mole_fractions, 0, -1)[..., None]  # s + (n_species, 1)
-        return 1e-4 * number_density[..., None] * np.sum(x * sigma, axis=-2)
-
-    def planck_mean_kappa(
-        self, temperature, mole_fractions, pressure: float | None = None
-    ) -> np.ndarray:
-        r"""Planck-mean absorption coefficient over the table's window, m⁻¹.
-
-        :math:`\bar\kappa = \int B_\eta(T)\, \kappa_\eta\, d\eta / \int B_\eta(T)\,
-        d\eta` over the grid (a uniform grid, so sums replace the integrals). Arguments as
-        :meth:`kappa`; returns shape s.
-        """
-        kappa = self.kappa(temperature, mole_fractions, pressure)
-        b = planck(self.wavenumber, np.asarray(temperature, dtype=np.float64)[..., None])
-        return np.sum(b * kappa, axis=-1) / np.sum(b, axis=-1)

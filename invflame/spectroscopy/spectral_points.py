@@ -4,11 +4,11 @@ An absorption table's bins (0.04 cm⁻¹ by default) are wider than flame lines 
 half widths 0.01–0.03 cm⁻¹ at 1000–2000 K). Where a bin holds a partly saturated line core, its
 mean transmission :math:`\overline{e^{-\tau}}` exceeds :math:`e^{-\bar\tau}` (Jensen's
 inequality): one optical depth per bin overstates the emission, by up to 12 % in single
-1 cm⁻¹ windows of the CO2 Q branches at 2000 K (``benchmarks/validate_forward.py --split``).
+1 cm⁻¹ windows of the CO2 Q branches at 2000 K (``studies/validate_forward.py --split``).
 
 So the table splits such bins into ``m`` = 2, 4 or 8 equal sub-bins, the *spectral points*,
 each with its own mean cross-section; the kernel solves the transfer at every point and the
-radiance of a bin is the mean over its points (:class:`operators.rte_tables.RTETables`).
+radiance of a bin is the mean over its points (:class:`operators.rte.tables.RTETables`).
 Which bins, and into how many, is planned once per table (:func:`plan_points`), from the
 cross-sections on the finest sub-bins and a set of reference columns of gas (homogeneous slabs,
 :data:`REFERENCES`): for each reference and bin ``k`` the error of ``m`` points against the
@@ -25,8 +25,8 @@ import itertools
 import numpy as np
 from scipy import constants
 
-from operators.planck import planck
-from operators.rte_blocks import interpolate_fraction
+from operators.rte.blocks import interpolate_fraction
+from operators.rte.planck import planck
 
 #: Most sub-bins per bin (a power of two): 0.005 cm⁻¹ at the default 0.04 cm⁻¹ bins.
 MAX_POINTS_PER_BIN = 8

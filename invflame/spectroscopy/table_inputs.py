@@ -9,7 +9,6 @@ from dataclasses import fields
 from importlib import resources
 
 import numpy as np
-from tqdm import tqdm
 
 from invflame.errors import InputDataError
 from invflame.spectroscopy import spectral_points
@@ -18,6 +17,7 @@ from invflame.spectroscopy.isotopologues import MOLECULE_ID
 from invflame.spectroscopy.linelist import LineList, read_par
 from invflame.spectroscopy.partition import hapi_module
 from invflame.spectroscopy.spectral_points import fine_grid, plan_points, points_of
+from solvers.progress import progress_bar
 
 #: Species of every table, in the order of the field arrays (after temperature).
 SPECIES = ("CO2", "H2O", "CH4")
@@ -209,7 +209,7 @@ def tabulate(linelists, species, wavenumber, temperatures, pressure, fractions,
         if linelists.get(name) is not None and len(linelists[name])
         for k, x in enumerate(fractions[j])
     ]
-    for i, column, name, x in tqdm(jobs, disable=not progress, desc="absorption table"):
+    for i, column, name, x in progress_bar(jobs, disable=not progress, desc="absorption table"):
         sigma[i, column] = cross_section(linelists[name], fine, temperatures[i], pressure, x)
     points = np.ones(wavenumber.size, dtype=int) if subdivision == 1 else plan_points(
         wavenumber, temperatures, sigma, species, fractions, pressure)

@@ -2,19 +2,16 @@
 that is unfinished, regularized otherwise or started from another problem."""
 
 import math
-import sys
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 import tomli_w
+from solver_race_reference import first_reach, recorded_reference
 
 from invflame.field import Field
 from invflame.geometry import VoxelGrid
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
-import solver_race  # noqa: E402
 
 GRID = VoxelGrid((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (3, 3, 3))
 
@@ -53,7 +50,7 @@ def mean_temperature(fields):
 
 def test_the_reference_takes_the_runs_objective_times_and_end_fields(tmp_path):
     run = write_run(tmp_path / "run")
-    name, recorded = solver_race.recorded_reference(run, "tv", Problem(10.0), mean_temperature)
+    name, recorded = recorded_reference(run, "tv", Problem(10.0), mean_temperature)
     rows = recorded["rows"]
     assert name == "adam lr=0.01 (recorded)"
     assert [row["loss"] for row in rows] == [10.0, 4.0, 2.5]
@@ -64,7 +61,7 @@ def test_the_reference_takes_the_runs_objective_times_and_end_fields(tmp_path):
     assert math.isnan(rows[1]["mse_t"])
     assert recorded["stop"].startswith("max_iter") and recorded["seconds"]["wall"] == 3.0
     # an unrecorded MSE_T is never "reached", so only the end reaches the final level
-    assert solver_race.first_reach(rows, "mse_t", 600.0) is rows[-1]
+    assert first_reach(rows, "mse_t", 600.0) is rows[-1]
 
 
 @pytest.mark.parametrize("case, message", [
@@ -78,4 +75,4 @@ def test_a_run_of_another_problem_is_refused(tmp_path, case, message):
         (run / "reconstruction.npz").unlink()
     start = 11.0 if case == "other start" else 10.0
     with pytest.raises(SystemExit, match=message):
-        solver_race.recorded_reference(run, "tv", Problem(start), mean_temperature)
+        recorded_reference(run, "tv", Problem(start), mean_temperature)

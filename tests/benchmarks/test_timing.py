@@ -1,12 +1,8 @@
 """The benchmarks' timing: rows timed in turn, the best of each kept."""
 
-import sys
-from pathlib import Path
 
 import numpy as np
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
-import timing  # noqa: E402
+import timing
 
 
 def test_rows_are_timed_in_turn_and_each_keeps_its_best(monkeypatch):

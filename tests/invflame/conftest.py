@@ -11,6 +11,8 @@ from invflame.geometry import CameraRig, VoxelGrid, paper_rig
 from invflame.phantoms import synthetic_plume
 from invflame.scene import Scene
 from invflame.spectroscopy.absorption_table import AbsorptionTable
+from invflame.spectroscopy.co2_lines import generate_co2_lines
+from invflame.spectroscopy.linelist import read_par
 
 
 @pytest.fixture(scope="module")
@@ -21,6 +23,15 @@ def plume_fields():
     truth = synthetic_plume(grid)
     return truth, {"start": synthetic_plume(grid, perturbation=0.3, seed=0),
                    "smoothed": Field(grid, smoothed(truth.values, 1.0))}
+
+
+@pytest.fixture(scope="session")
+def table(h2o_par) -> AbsorptionTable:
+    """A small absorption table at 250, 800 and 1600 K: the generated CO2 lines of
+    691.4–692.7 cm⁻¹ and the packaged H2O lines of 624–751 cm⁻¹."""
+    linelists = {"CO2": generate_co2_lines().window(691.4, 692.7),
+                 "H2O": read_par(h2o_par, nu_range=(624, 751))}
+    return AbsorptionTable.build(linelists, temperatures=[250.0, 800.0, 1600.0])
 
 
 @pytest.fixture(scope="session")

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from invflame.errors import InputDataError
-from invflame.experiments.measurement import Measurement
 from invflame.geometry import VoxelGrid, paper_rig
+from invflame.measurement import Measurement
 from invflame.measurement_checks import HOTTEST_FLAME, MeasurementWarning
 from invflame.measurement_file import MeasurementFile, read_measurement, write_measurement
-from operators.planck import planck
+from operators.rte.planck import planck
 
 from .test_measurement_file import rewrite
 

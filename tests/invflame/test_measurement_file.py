@@ -6,9 +6,9 @@ import xarray as xr
 
 import operators as op
 from invflame.errors import InputDataError
-from invflame.experiments.measurement import Measurement
 from invflame.geometry import CameraRig, VoxelGrid, paper_rig
 from invflame.geometry.rig_file import rig_records
+from invflame.measurement import Measurement
 from invflame.measurement_file import MeasurementFile, read_measurement, write_measurement
 from invflame.representations.whitening import whitened
 

@@ -6,8 +6,8 @@ import json
 import numpy as np
 
 from invflame.experiments import config, runner
-from invflame.experiments.measurement import Measurement
 from invflame.geometry import VoxelGrid, paper_rig
+from invflame.measurement import Measurement
 from invflame.measurement_file import MeasurementFile, write_measurement
 
 RIG = paper_rig(VoxelGrid.poolfire(8), n_pixels=3)

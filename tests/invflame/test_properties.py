@@ -123,9 +123,9 @@ def test_the_validator_gives_a_valid_configuration_or_a_config_error(raw):
 
 
 @pytest.fixture(scope="module")
-def records(shared_linedata):
+def records(h2o_par):
     """Twenty real H2O records (bytes, 160 characters each)."""
-    lines = (shared_linedata / "H2O_HITRAN2012_600-800.par").read_bytes().splitlines()
+    lines = h2o_par.read_bytes().splitlines()
     return [line for line in lines[::80] if len(line) == RECORD_LENGTH][:20]
 
 

@@ -6,17 +6,14 @@ import numpy as np
 import pytest
 
 import operators as op
-from invflame.background import (
-    BlackbodyWall,
-    MeasuredBackground,
-    background_from_config,
-    read_background,
-    write_background,
-)
+from invflame.background import BlackbodyWall, MeasuredBackground
+from invflame.background_file import background_from_config, read_background, write_background
 from invflame.errors import InputDataError
 from invflame.geometry import VoxelGrid, paper_rig
+from invflame.measurement import Measurement
+from invflame.measurement_file import MeasurementFile, write_measurement
 from invflame.scene import Scene
-from operators.planck import planck
+from operators.rte.planck import planck
 
 from .test_scene import physical_direction, small_table, smooth_field
 
@@ -101,9 +98,6 @@ def test_background_file_round_trip_and_bad_files(tmp_path):
 def test_a_flameless_measurement_file_is_a_background(plain, tmp_path):
     """A frame without the flame, written as a measurement file, read back as the per-camera
     mean of its (here identical) pixels' spectra."""
-    from invflame.experiments.measurement import Measurement
-    from invflame.measurement_file import MeasurementFile, write_measurement
-
     wall = plain.with_background(BlackbodyWall(700.0, 0.5))
     air = np.stack([np.full(GRID.shape, 300.0), *np.zeros((3, *GRID.shape))])
     frame = wall.simulate(air)

@@ -1,44 +1,87 @@
-"""Float64 NumPy reference of the emission RTE and small synthetic tables, for tests only.
+r"""The reference formal solution of the emission RTE, and small synthetic tables and rays, for
+tests only.
 
-The reference follows the formal solution term by term: one ray at a time, one segment at a
-time, exact Planck radiance and the cross-section spline evaluated by
-:class:`operators.tabulated.PiecewiseCubic`.
+The reference is the formal solution as it reads,
+:math:`I = \sum_k B_k (1 - t_k) P_k + P_n I_\mathrm{bg}` with :math:`P_k = \prod_{j<k} t_j`, in
+plain JAX on whole (ray, segment, wavenumber) arrays: cumulative products of the segments'
+transmittances, no batching, no custom derivative, in float64; JAX differentiates it. The
+cross-sections are the spline :class:`operators.tabulated.PiecewiseCubic` through their values
+at the temperature nodes, as the kernel's tables take them. Every backend of the kernel is
+tested against it (``test_rte_backends.py``).
 """
 
+import jax.numpy as jnp
 import numpy as np
 
 import operators as op
-from operators.planck import BOLTZMANN, planck
+from operators.base import precision
+from operators.rte.planck import BOLTZMANN, planck, planck_table
 from operators.tabulated import PiecewiseCubic
 
 
-def reference_radiance(wavenumber, temperatures, sigma, fields, lengths, pressure=101325.0):
-    """Spectral radiance (n_rays, n_eta) in W/(m²·sr·cm⁻¹).
+def formal_solution(emission, tau, background=None):
+    """Radiance (n_rays, n_eta) leaving the near end of rays of homogeneous segments.
+
+    Parameters
+    ----------
+    emission : (n_rays, n_seg, n_eta) Planck radiance of each segment in W/(m²·sr·cm⁻¹),
+        segments nearest the camera first
+    tau : (n_rays, n_seg, n_eta) optical depth of each segment
+    background : (n_rays, n_eta) radiance behind each ray's far end, or None
+    """
+    through = jnp.cumprod(jnp.exp(-tau), axis=1)  # P_{k+1}: in front of segment k + 1
+    before = jnp.concatenate([jnp.ones_like(through[:, :1]), through[:, :-1]], axis=1)  # P_k
+    radiance = jnp.sum(emission * -jnp.expm1(-tau) * before, axis=1)
+    return radiance if background is None else radiance + through[:, -1] * background
+
+
+def reference_radiance(wavenumber, temperatures, sigma, fields, lengths, pressure=101325.0,
+                       background=None, soot=None, planck_mode="exact"):
+    """Spectral radiance (n_rays, n_eta) in W/(m²·sr·cm⁻¹), computed in float64 (JAX's 64-bit
+    mode inside): a JAX function of ``fields``, ``lengths`` and ``background``, to be
+    differentiated inside :func:`operators.precision` of float64.
 
     Parameters
     ----------
     wavenumber : (n_eta,) cm⁻¹
     temperatures : (n_T,) K, spline nodes
     sigma : (n_T, n_species, n_eta) cross-sections at the nodes in cm²/molecule
-    fields : (1 + n_species, n_rays, n_seg) T in K and mole fractions
-    lengths : (n_rays, n_seg) m
+    fields : (1 + n_species, n_rays, n_seg) T in K and mole fractions, then, with ``soot``,
+        the soot volume fraction
+    lengths : (n_rays, n_seg) m; the entries after a ray's last non-zero length are padding,
+        which counts for nothing, in the value and in the derivatives
     pressure : Pa
+    background : (n_rays, n_eta) W/(m²·sr·cm⁻¹) behind each ray, or None
+    soot : the Rayleigh constant C of the soot's absorption C f_v eta 10^2 in m⁻¹, or None
+    planck_mode : "exact", Planck's law, or "table", its not-a-knot cubic spline in T through
+        the nodes :func:`operators.rte.planck.planck_table` refines (those of the kernel's
+        Planck table)
     """
-    spline = PiecewiseCubic(temperatures, sigma)
-    n_rays, n_seg = lengths.shape
-    out = np.zeros((n_rays, wavenumber.size))
-    for r in range(n_rays):
-        transmittance = np.ones(wavenumber.size)
-        for k in range(n_seg):
-            temperature = fields[0, r, k]
-            density = pressure / (BOLTZMANN * temperature)  # molecules / m^3
-            kappa = np.zeros(wavenumber.size)
-            for s in range(sigma.shape[1]):
-                kappa += fields[1 + s, r, k] * density * spline(temperature)[s] * 1e-4
-            t = np.exp(-kappa * lengths[r, k])
-            out[r] += planck(wavenumber, temperature) * (1.0 - t) * transmittance
-            transmittance = transmittance * t
-    return out
+    with precision(np.float64):
+        eta = jnp.asarray(wavenumber, jnp.float64)
+        fields = jnp.asarray(fields, jnp.float64)
+        lengths = jnp.asarray(lengths, jnp.float64)
+        n_species = sigma.shape[1]
+        temperature = fields[0]
+        density = pressure / (BOLTZMANN * temperature)  # molecules / m^3
+        cross = PiecewiseCubic(temperatures, sigma)(temperature)  # (r, k, s, eta) cm^2
+        kappa = (jnp.einsum("srk,rkse->rke", fields[1:1 + n_species], cross)
+                 * (density * 1e-4)[..., None])
+        if soot is not None:
+            kappa = kappa + soot * fields[1 + n_species][..., None] * eta * 1e2
+        n_seg = lengths.shape[1]
+        counts = jnp.max(jnp.where(lengths != 0, jnp.arange(1, n_seg + 1), 0), axis=1)
+        real = jnp.arange(n_seg) < counts[:, None]
+        tau = kappa * jnp.where(real, lengths, 0.0)[..., None]
+        if planck_mode == "table":
+            nodes, _ = planck_table(wavenumber, temperatures)
+            spline = PiecewiseCubic(nodes, planck(wavenumber[None, :], nodes[:, None]))
+            emission = spline(temperature)
+        else:
+            emission = planck(eta, temperature[..., None])
+        if background is not None:
+            background = jnp.asarray(background, jnp.float64)
+        return formal_solution(emission, tau, background)
 
 
 def synthetic_sigma(n_eta=50, temperatures=(300.0, 700.0, 1200.0, 1800.0, 2500.0), seed=0,

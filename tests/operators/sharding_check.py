@@ -20,7 +20,7 @@ import solvers
 from invflame.geometry import VoxelGrid, paper_rig
 from invflame.representations.voxel import VoxelRepresentation
 from invflame.scene import Scene
-from operators.emission_rte import emission_radiance
+from operators.rte import emission_radiance
 from operators.sharding import shard_rays
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "invflame"))

@@ -9,7 +9,7 @@ import json
 import numba
 import numpy as np
 
-from operators.rte_sweep_cpu import _kernels
+from operators.rte.numba_targets import compiled_sweeps
 
 TINY = np.float32(1e-20)
 
@@ -24,7 +24,7 @@ def products(a):
 
 
 products(np.ones(64, np.float32))  # Numba's threads start here, from the main thread
-sweeps = _kernels(1, 1, "float32")
+sweeps = compiled_sweeps(1, 1, "float32")
 n_rays, n_eta = 8, 32
 coef = np.zeros((1, 8, n_eta), np.float32)  # rows 0-3: the gas's cubic, 4-7: Planck's
 coef[0, 3] = 1.0  # cross-section row 1 at every offset: the optical depth is the amount

@@ -1,13 +1,11 @@
 """Emission kernel in front of a background: I = I_flame + tau_ray I_bg, its derivatives, a slab."""
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 import pytest
-from rte_reference import check_derivatives, random_rays, reference_radiance, synthetic_sigma
+from rte_reference import check_derivatives, random_rays, synthetic_sigma
 
-from operators.emission_rte import EmissionRTE, RTETables, emission_radiance
-from operators.planck import BOLTZMANN, planck
+from operators.rte import EmissionRTE
+from operators.rte.planck import BOLTZMANN, planck
 from operators.tabulated import PiecewiseCubic
 
 ETA, NODES, SIGMA = synthetic_sigma(n_eta=40)
@@ -19,24 +17,6 @@ def wall(n_rays, seed=3):
     """A different grey-body background per ray, W/(m2 sr cm-1)."""
     rng = np.random.default_rng(seed)
     return rng.uniform(0.3, 0.9, (n_rays, 1)) * planck(ETA, rng.uniform(300, 900, (n_rays, 1)))
-
-
-def reference_transmittance(fields, lengths):
-    """exp(-sum_k kappa_k ds_k) per ray and wavenumber, from the float64 reference."""
-    kappa = np.einsum("srk,rkse->rke", fields[1:], SPLINE(fields[0]))
-    kappa *= (P / (BOLTZMANN * fields[0]) * 1e-4)[..., None]
-    return np.exp(-np.sum(kappa * lengths[..., None], axis=1))
-
-
-@pytest.mark.usefixtures("x64")
-def test_background_is_added_through_the_ray_transmittance():
-    fields, lengths = random_rays(n_rays=5, n_seg=6, seed=11)
-    background = wall(5)
-    tables = RTETables.from_spline(ETA, NODES, SPLINE.coef, P, np.float64, "exact")
-    ours = emission_radiance(tables, fields, lengths, 2, background)
-    flame = reference_radiance(ETA, NODES, SIGMA, fields, lengths, P)
-    expected = flame + reference_transmittance(fields, lengths) * background
-    np.testing.assert_allclose(ours, expected, rtol=1e-12)
 
 
 def test_no_background_leaves_the_numbers_unchanged():
@@ -54,36 +34,6 @@ def test_jacobian_dot_and_taylor_tests_with_background(planck_mode):
     rte = EmissionRTE(ETA, NODES, SPLINE.coef, lengths, P, np.float64, planck_mode,
                       batch_rays=2, background=wall(5))
     check_derivatives(rte, fields, rtol=1e-10)
-
-
-@pytest.mark.usefixtures("x64")
-def test_background_cotangent_is_the_ray_transmittance():
-    """The reverse sweep's cotangent of I_bg is w * tau_ray, and the fields' cotangents match
-    plain autodiff of the whole-array formulation with background."""
-    fields, lengths = random_rays(n_rays=6, n_seg=8, seed=5)
-    lengths = np.where(lengths > 0, lengths, 0.004)
-    background = wall(6)
-    tables = RTETables.from_spline(ETA, NODES, SPLINE.coef, P, np.float64, "exact")
-    weights = jnp.asarray(np.random.default_rng(1).standard_normal((6, ETA.size)))
-
-    def plain(f, s, b):
-        sigma = SPLINE(f[0])
-        kappa = jnp.einsum("srk,rkse->rke", f[1:], sigma) * (P / (BOLTZMANN * f[0]) * 1e-4)[
-            ..., None]
-        tau = kappa * s[..., None]
-        before = jnp.cumsum(tau, axis=1) - tau
-        emission = planck(jnp.asarray(ETA), f[0][..., None])
-        return (jnp.sum(emission * -jnp.expm1(-tau) * jnp.exp(-before), axis=1)
-                + jnp.exp(-jnp.sum(tau, axis=1)) * b)
-
-    args = tuple(jnp.asarray(a) for a in (fields, lengths, background))
-    ours = jax.grad(lambda f, s, b: jnp.sum(weights * emission_radiance(tables, f, s, 4, b)),
-                    argnums=(0, 1, 2))(*args)
-    theirs = jax.grad(lambda f, s, b: jnp.sum(weights * plain(f, s, b)), argnums=(0, 1, 2))(*args)
-    np.testing.assert_allclose(ours[2], weights * reference_transmittance(fields, lengths),
-                               rtol=1e-12)
-    for mine, other in zip(ours, theirs, strict=True):
-        np.testing.assert_allclose(mine, other, rtol=1e-10, atol=1e-12 * np.abs(other).max())
 
 
 @pytest.mark.parametrize("planck_mode", ["exact", "table"])

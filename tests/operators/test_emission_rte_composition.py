@@ -3,12 +3,13 @@ against a reference that interpolates with ``np.interp``, dot and Taylor tests, 
 
 import numpy as np
 import pytest
-from rte_reference import synthetic_sigma
+from rte_reference import formal_solution, synthetic_sigma
 
 import operators as op
-from operators.emission_rte import EmissionRTE, RTETables, emission_radiance
-from operators.planck import BOLTZMANN, planck
-from operators.rte_blocks import fraction_weights
+from operators.base import precision
+from operators.rte import EmissionRTE, RTETables, emission_radiance
+from operators.rte.blocks import fraction_weights
+from operators.rte.planck import BOLTZMANN, planck
 from operators.tabulated import PiecewiseCubic
 
 P = 101325.0
@@ -31,25 +32,21 @@ SPLINE = PiecewiseCubic(NODES, SIGMA)
 
 
 def reference_radiance(fields, lengths):
-    """Formal solution ray by ray, the cross-sections interpolated in each species' own mole
-    fraction by ``np.interp`` (constant beyond the nodes)."""
-    out = np.zeros((lengths.shape[0], ETA.size))
+    """The reference formal solution (:func:`rte_reference.formal_solution`) with the
+    cross-sections interpolated in each species' own mole fraction by ``np.interp`` (constant
+    beyond the nodes), segment by segment."""
     first = np.cumsum([0, *map(len, FRACTION_NODES)])
-    for r in range(lengths.shape[0]):
-        through = np.ones(ETA.size)
-        for k in range(lengths.shape[1]):
-            temperature = fields[0, r, k]
-            columns = SPLINE(temperature)
-            kappa = np.zeros(ETA.size)
-            for s, nodes in enumerate(FRACTION_NODES):
-                x = fields[1 + s, r, k]
-                own = columns[first[s]:first[s + 1]]
-                sigma = np.array([np.interp(x, nodes, own[:, j]) for j in range(ETA.size)])
-                kappa += x * P / (BOLTZMANN * temperature) * sigma * 1e-4
-            t = np.exp(-kappa * lengths[r, k])
-            out[r] += planck(ETA, temperature) * (1 - t) * through
-            through *= t
-    return out
+    tau = np.zeros(lengths.shape + (ETA.size,))
+    for r, k in np.ndindex(lengths.shape):
+        temperature = fields[0, r, k]
+        columns = SPLINE(temperature)
+        for s, nodes in enumerate(FRACTION_NODES):
+            x = fields[1 + s, r, k]
+            own = columns[first[s]:first[s + 1]]
+            sigma = np.array([np.interp(x, nodes, own[:, j]) for j in range(ETA.size)])
+            tau[r, k] += x * P / (BOLTZMANN * temperature) * sigma * 1e-4 * lengths[r, k]
+    with precision(np.float64):
+        return formal_solution(planck(ETA, fields[0][..., None]), tau)
 
 
 def mid_interval_rays(n_rays=4, n_seg=5, seed=3):

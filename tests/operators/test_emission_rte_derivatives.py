@@ -1,4 +1,5 @@
-"""EmissionRTE derivatives: dot and Taylor tests, the custom VJP against plain autodiff, memory."""
+"""EmissionRTE derivatives: dot and Taylor tests, linearize, float32 against float64, memory
+(every backend's derivatives against the reference: ``test_rte_backends.py``)."""
 
 from functools import partial
 
@@ -8,31 +9,13 @@ import numpy as np
 import pytest
 from rte_reference import check_derivatives, random_rays, synthetic_sigma
 
-from operators.emission_rte import (
-    EmissionRTE,
-    RTETables,
-    emission_radiance,
-    emission_radiance_jvp,
-)
-from operators.planck import BOLTZMANN, planck
+from operators.rte import EmissionRTE, RTETables, emission_radiance
 from operators.tabulated import PiecewiseCubic
 
 ETA, NODES, SIGMA = synthetic_sigma(n_eta=40)
 SPLINE = PiecewiseCubic(NODES, SIGMA)
 P = 101325.0
 # directions scaled like the fields: kelvins for T, percent-level for mole fractions
-
-
-def plain_radiance(fields, lengths):
-    """Formal solution with whole (ray, segment, wavenumber) arrays, for JAX autodiff."""
-    temperature = fields[0]
-    sigma = SPLINE(temperature)  # (r, k, species, eta)
-    density = P / (BOLTZMANN * temperature)
-    kappa = jnp.einsum("srk,rkse->rke", fields[1:], sigma) * (density * 1e-4)[..., None]
-    tau = kappa * lengths[..., None]
-    before = jnp.cumsum(tau, axis=1) - tau
-    emission = planck(jnp.asarray(ETA), temperature[..., None])
-    return jnp.sum(emission * -jnp.expm1(-tau) * jnp.exp(-before), axis=1)
 
 
 @pytest.mark.parametrize("planck_mode", ["exact", "table"])
@@ -52,37 +35,6 @@ def test_linearize_keeps_value_and_matches_jvp_vjp():
     v, w = rng.standard_normal(rte.dims), rng.standard_normal(rte.dimsd)
     np.testing.assert_allclose(jac.matvec(v.ravel()), rte.jvp(fields, v).ravel(), rtol=1e-13)
     np.testing.assert_allclose(jac.rmatvec(w.ravel()), rte.vjp(fields, w).ravel(), rtol=1e-13)
-
-
-@pytest.mark.usefixtures("x64")
-def test_custom_vjp_equals_autodiff_of_the_plain_formulation():
-    fields, lengths = random_rays(n_rays=6, n_seg=8, seed=5)
-    lengths = np.where(lengths > 0, lengths, 0.004)  # every segment real: d/dlength defined
-    tables = RTETables.from_spline(ETA, NODES, SPLINE.coef, P, np.float64, "exact")
-    weights = jnp.asarray(np.random.default_rng(1).standard_normal((6, ETA.size)))
-
-    def loss(radiance_fn, f, s):
-        return jnp.sum(weights * radiance_fn(f, s))
-
-    args = (jnp.asarray(fields), jnp.asarray(lengths))
-    ours = jax.grad(lambda f, s: loss(lambda a, b: emission_radiance(tables, a, b, 4), f, s),
-                    argnums=(0, 1))(*args)
-    plain = jax.grad(lambda f, s: loss(plain_radiance, f, s), argnums=(0, 1))(*args)
-    np.testing.assert_allclose(ours[0], plain[0], rtol=1e-10, atol=1e-12 * np.abs(plain[0]).max())
-    np.testing.assert_allclose(ours[1], plain[1], rtol=1e-10)
-
-
-@pytest.mark.usefixtures("x64")
-def test_jvp_in_lengths_matches_autodiff():
-    fields, lengths = random_rays(n_rays=3, n_seg=4, seed=2)
-    lengths = lengths + 0.001
-    tables = RTETables.from_spline(ETA, NODES, SPLINE.coef, P, np.float64, "exact")
-    d_lengths = np.random.default_rng(3).uniform(0, 0.01, lengths.shape)
-    zeros = np.zeros_like(fields)
-    _, ours = emission_radiance_jvp(tables, fields, lengths, zeros, d_lengths)
-    _, plain = jax.jvp(plain_radiance, (jnp.asarray(fields), jnp.asarray(lengths)),
-                       (jnp.asarray(zeros), jnp.asarray(d_lengths)))
-    np.testing.assert_allclose(ours, plain, rtol=1e-11)
 
 
 def test_float32_gradient_is_close_to_float64():

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.interpolate import PPoly
 
-from operators.planck import C1, C2, planck, planck_table
+from operators.rte.planck import C1, C2, planck, planck_table
 
 ETA = np.arange(650.0, 725.0 + 1e-9, 0.04)
 

@@ -12,14 +12,15 @@ import pytest
 from rte_reference import random_rays, synthetic_sigma
 
 from operators.base import precision
-from operators.rte_kernel import (
+from operators.rte import (
     SWEEPS,
     choose_sweeps,
     emission_radiance,
     emission_radiance_jvp,
 )
-from operators.rte_sweep_cpu import _X86, _absorptance, _source_file, target
-from operators.rte_tables import RTETables, rayleigh_soot_constant
+from operators.rte.numba_arithmetic import X86, absorptance
+from operators.rte.numba_targets import _source_file, target
+from operators.rte.tables import RTETables, rayleigh_soot_constant
 from operators.tabulated import PiecewiseCubic
 
 ETA, NODES, SIGMA = synthetic_sigma(n_eta=40)
@@ -173,7 +174,7 @@ def _compiled_absorptance(x):
     """The sweeps' absorptance over an array, in a loop Numba vectorizes as theirs."""
     a = np.empty_like(x)
     for j in range(x.size):
-        a[j] = _absorptance(x[j])
+        a[j] = absorptance(x[j])
     return a
 
 
@@ -196,7 +197,7 @@ def test_the_sweeps_default_to_numba_on_a_cpu_and_refuse_unknown_names():
         choose_sweeps("c")
 
 
-@pytest.mark.skipif(not _X86, reason="the sweeps set the flush on x86 processors only")
+@pytest.mark.skipif(not X86, reason="the sweeps set the flush on x86 processors only")
 def test_sweeps_flush_subnormals_whichever_thread_started_numbas_threads(script_report):
     """Numba's threads inherit the floating-point mode of the thread that starts them: XLA's
     threads flush subnormal numbers to zero, Python's main thread does not. Each sweep flushes

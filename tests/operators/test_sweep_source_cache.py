@@ -3,7 +3,7 @@
 import numba
 import pytest
 
-from operators.rte_sweep_cpu import _kernels, _source_file
+from operators.rte.numba_targets import _source_file, compiled_sweeps
 
 
 @pytest.mark.parametrize("damage", [lambda text: text.replace(b"x", b"\0"),
@@ -20,7 +20,7 @@ def test_a_damaged_source_file_is_written_again(tmp_path, monkeypatch, damage):
 
 def test_sweeps_whose_cached_source_holds_null_bytes_are_rebuilt(tmp_path, monkeypatch):
     monkeypatch.setenv("INVFLAME_CACHE", str(tmp_path))
-    build = _kernels.__wrapped__  # past the per-process cache: as a later run would
+    build = compiled_sweeps.__wrapped__  # past the per-process cache: as a later run would
     build(1, 1, "float64")
     (path,) = (tmp_path / "sweeps").glob("*.py")
     whole = path.read_bytes()

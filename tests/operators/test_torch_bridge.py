@@ -6,7 +6,7 @@ import pytest
 import torch
 from rte_reference import random_rays, synthetic_sigma
 
-from operators.emission_rte import RTETables, emission_radiance
+from operators.rte import RTETables, emission_radiance
 from operators.tabulated import PiecewiseCubic
 from operators.torch_bridge import torch_function
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from operators.base import precision
-from operators.xla_ffi import HANDLER, argument, executing, no_error, register, result
+from operators.rte.xla_ffi import HANDLER, argument, executing, no_error, register, result
 
 
 def scaled_rows(frame):

@@ -11,9 +11,9 @@ import llvmlite.binding as llvm
 import numba
 import numpy as np
 
-from operators.rte_sweep_cpu import _kernels
+from operators.rte.numba_targets import compiled_sweeps
 
-sweeps = _kernels(1, 1, "float32")
+sweeps = compiled_sweeps(1, 1, "float32")
 n_rays, n_eta = 2, 32
 coef, background = np.zeros((1, 8, n_eta), np.float32), np.zeros((1, n_eta), np.float32)
 index, offset = np.zeros((n_rays, 1), np.int32), np.zeros((n_rays, 1), np.float32)

@@ -7,8 +7,8 @@ import pytest
 
 import operators as op
 import solvers
-from operators.emission_rte import KernelOperator
 from operators.pylops_import import pylops
+from operators.rte import KernelOperator
 
 DIMS = (2, 3, 4, 2)
 REGULARIZERS = {

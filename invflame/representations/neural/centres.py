@@ -20,7 +20,7 @@ import numpy as np
 import torch
 
 import solvers
-from invflame.representations.neural.network import FieldNetwork, centre_points, pretrain
+from invflame.representations.neural.network import FieldNetwork, centre_points, start_network
 from invflame.representations.neural.regularizers import regularizer_after
 from invflame.representations.normalization import field_scales, per_field
 from invflame.representations.protocol import Representation
@@ -77,8 +77,10 @@ class NeuralCentresRepresentation(Representation):
         self.forward = (scene.operator if forward is None else forward) @ self.at_centres
 
     def initial_parameters(self, fields=None, iterations: int = 1000, lr: float = 1e-3,
-                           seed: int = 0, progress: bool = True) -> np.ndarray:
-        """Starting weights: the network pretrained on ``fields`` (or as initialized).
+                           seed: int = 0, progress: bool = True,
+                           offset: bool = False) -> np.ndarray:
+        """Starting weights: the network pretrained on ``fields``, or offset by them (or as
+        initialized).
 
         Parameters
         ----------
@@ -87,9 +89,12 @@ class NeuralCentresRepresentation(Representation):
             run; None keeps the current weights.
         iterations, lr, seed, progress
             Passed to :func:`~invflame.representations.neural.network.pretrain`.
+        offset : bool, optional
+            Start the network at ``fields`` exactly and let it learn the correction
+            (:meth:`FieldNetwork.offset_by`) instead of pretraining it.
         """
         if fields is not None:
-            pretrain(self.network, fields, iterations, lr, seed, progress=progress)
+            start_network(self.network, fields, offset, iterations, lr, seed, progress)
         return self.network.parameter_vector().astype(self.dtype)
 
     def regularizer(self, kind: str) -> solvers.Regularizer | None:

@@ -12,7 +12,7 @@ as in NeRF (Mildenhall et al. 2020), with the emission physics of the voxel path
    (opacity from the Planck-mean absorption coefficient), merged with the coarse ones and
    sorted; fields from the fine network;
 3. each set of samples is a piecewise-homogeneous ray (sample lengths sum to the chord),
-   rendered by the JAX emission kernel :func:`operators.emission_rte.emission_radiance`
+   rendered by the JAX emission kernel :func:`operators.rte.kernel.emission_radiance`
    through :func:`operators.torch_bridge.torch_function` (its backward pass is the kernel's
    VJP), the coarse and the fine set in one call, in front of the scene's background and
    with its known soot, as the voxel map renders them; the sub-ray spectra of a pixel are
@@ -65,7 +65,7 @@ import numpy as np
 import torch
 
 import solvers
-from invflame.representations.neural.network import FieldNetwork, centre_points, pretrain
+from invflame.representations.neural.network import FieldNetwork, centre_points, start_network
 from invflame.representations.neural.regularizers import CentreRegularizer, regularizer_after
 from invflame.representations.neural.renderer import NeuralRenderer
 from invflame.representations.neural.sampling import PlanckMeanOpacity
@@ -310,8 +310,10 @@ class NeuralFieldRepresentation(Representation):
         return theta[:self.coarse.n_parameters], theta[self.coarse.n_parameters:]
 
     def initial_parameters(self, fields=None, iterations: int = 1000, lr: float = 1e-3,
-                           seed: int = 0, progress: bool = True) -> np.ndarray:
-        """Starting weights: both networks pretrained on ``fields`` (or as initialized).
+                           seed: int = 0, progress: bool = True,
+                           offset: bool = False) -> np.ndarray:
+        """Starting weights: both networks pretrained on ``fields``, or offset by them (or as
+        initialized).
 
         Parameters
         ----------
@@ -320,6 +322,9 @@ class NeuralFieldRepresentation(Representation):
             field of the voxel run; None keeps the networks' current weights.
         iterations, lr, seed, progress
             Passed to :func:`~invflame.representations.neural.network.pretrain`.
+        offset : bool, optional
+            Start both networks at ``fields`` exactly and let them learn the correction
+            (:meth:`FieldNetwork.offset_by`) instead of pretraining them.
 
         Returns
         -------
@@ -327,7 +332,7 @@ class NeuralFieldRepresentation(Representation):
         """
         if fields is not None:
             for network in (self.coarse, self.fine):
-                pretrain(network, fields, iterations, lr, seed, progress=progress)
+                start_network(network, fields, offset, iterations, lr, seed, progress)
         return np.concatenate([self.coarse.parameter_vector(), self.fine.parameter_vector()])
 
     # -- the problem ----------------------------------------------------------------------

@@ -25,19 +25,22 @@ air. Its biases start at :math:`s = 10^{-3}` and :math:`h = 1` (within its bound
 The network can be evaluated with its own parameters (``network(points)``) or with any flat
 parameter vector (:meth:`FieldNetwork.evaluate`, through :func:`torch.func.functional_call`),
 which is how the representations differentiate with respect to the weights.
-:func:`pretrain` fits a network to a voxel field (the paper's initialization).
+:func:`pretrain` fits a network to a voxel field (the paper's initialization);
+:meth:`FieldNetwork.offset_by` starts it at a voxel field exactly instead: the network's output
+is added to the field's own pre-activations, interpolated between the voxel centres, and its
+last layer starts at zero, so the network learns the correction to the field.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import torch
-from tqdm import tqdm
 
 from invflame.geometry import VoxelGrid
 from invflame.representations.normalization import SCALES
 from invflame.representations.state_relation import StateRelation
 from operators.interop import TORCH_DTYPES
+from solvers.progress import progress_bar
 
 POINTS_PER_PASS = 2**14
 """Points per pass of the MLP: a pass's activations (64 units × 4 bytes per point in float32,
@@ -46,6 +49,11 @@ cores, in passes of 2¹⁴ against one pass, the forward took 0.064–0.066 agai
 the forward-mode product 0.19–0.20 against 0.65–0.72 s and the pullback 0.13–0.19 against
 0.27–0.31 s; passes of 2¹² and 2¹³ points were as fast within the scatter of two runs, of 2¹¹
 and 2¹⁶ slower (``python benchmarks/bench_network.py``)."""
+
+OFFSET_MARGIN = 1e-3
+"""Least share of its range an output takes in :meth:`FieldNetwork.preactivations`
+(dimensionless): the progress of ambient air becomes 1e-3 of its bound, as an untrained
+network's."""
 
 AMBIENT_START = (300.0, 0.02, 0.02, 0.02)
 """Fields (T in K, mole fractions) of an untrained network: the last layer's bias values."""
@@ -117,6 +125,7 @@ class FieldNetwork(torch.nn.Module):
         self.register_buffer("frequencies", torch.pi * 2.0 ** torch.arange(
             self.n_frequencies, dtype=dtype))
         self.register_buffer("scales", torch.as_tensor(SCALES, dtype=dtype))
+        self.register_buffer("offset", None)
 
     @classmethod
     def for_scene(cls, scene, n_frequencies: int = 10, hidden: int = 64, depth: int = 4,
@@ -128,9 +137,13 @@ class FieldNetwork(torch.nn.Module):
                    dtype=TORCH_DTYPES[np.dtype(scene.dtype)], state_relation=state_relation)
 
     # -- the map ------------------------------------------------------------------------------
+    def unit(self, points: torch.Tensor) -> torch.Tensor:
+        """Points ``(..., 3)`` in m mapped to the box :math:`[-1, 1]^3` (dimensionless)."""
+        return 2.0 * (points - self.lower) / self.extent - 1.0
+
     def encode(self, points: torch.Tensor) -> torch.Tensor:
         r""":math:`\gamma(p)` of points ``(..., 3)`` in m: shape ``(..., 3 (1 + 2 L))``."""
-        p = 2.0 * (points - self.lower) / self.extent - 1.0
+        p = self.unit(points)
         angles = (p[..., None, :] * self.frequencies[:, None]).flatten(-2)
         return torch.cat([p, torch.sin(angles), torch.cos(angles)], dim=-1)
 
@@ -142,6 +155,8 @@ class FieldNetwork(torch.nn.Module):
         """
         flat = points.reshape(-1, points.shape[-1])
         z = torch.cat([self.mlp(self.encode(part)) for part in torch.split(flat, POINTS_PER_PASS)])
+        if self.offset is not None:
+            z = z + self._offset_at(flat)
         z = torch.movedim(z.reshape(*points.shape[:-1], z.shape[-1]), -1, 0)
         if self.state_relation is not None:
             relation = self.state_relation
@@ -151,6 +166,78 @@ class FieldNetwork(torch.nn.Module):
         t_min, t_max = self.temperature_range
         temperature = t_min + (t_max - t_min) * torch.sigmoid(z[:1])
         return torch.cat([temperature, torch.sigmoid(z[1:])])
+
+    def preactivations(self, fields) -> np.ndarray:
+        r"""The state relation's output pre-activations :math:`z` whose states are nearest to
+        ``fields``.
+
+        Parameters
+        ----------
+        fields : array_like, shape (4, ...)
+            T in K and mole fractions of CO2, H2O, CH4.
+
+        Returns
+        -------
+        ndarray, shape (2, ...)
+            The logits of the progress and factor of :meth:`StateRelation.invert`, each as a
+            share of its range, the shares clipped to [:data:`OFFSET_MARGIN`, 1 −
+            :data:`OFFSET_MARGIN`] (ambient air, progress 0, sits where the sigmoid still has
+            slope).
+
+        Raises
+        ------
+        ValueError
+            For a network without a state relation (its mole fractions span decades a logit
+            margin would distort).
+        """
+        relation = self.state_relation
+        if relation is None:
+            raise ValueError("a network starts offset by fields only with a state relation "
+                             "(representation.parameters = 'state-relation'); pretrain one "
+                             "that outputs the four fields")
+        s, h = relation.invert(np.asarray(fields, dtype=np.float64))
+        low, high = relation.factor_range
+        shares = np.stack([s / relation.progress_max,
+                           (h - low) / (high - low) if high > low else np.full_like(h, 0.5)])
+        shares = np.clip(shares, OFFSET_MARGIN, 1.0 - OFFSET_MARGIN)
+        return np.log(shares / (1.0 - shares))
+
+    def offset_by(self, fields) -> None:
+        """Start the network at voxel fields: its output adds to their pre-activations.
+
+        The pre-activations of ``fields`` (:meth:`preactivations`) become a buffer that the
+        network's output is added to, interpolated trilinearly between the voxel centres
+        (constant beyond the outermost centres), and the last layer's weights and biases are
+        set to zero: at the voxel centres the network then gives ``fields`` (up to the
+        clipping of :meth:`preactivations`) and its weights learn the correction.
+
+        Parameters
+        ----------
+        fields : Field or array_like, shape (4, nx, ny, nz)
+            Fields on the network's grid (T in K, mole fractions).
+
+        Raises
+        ------
+        ValueError
+            For fields on another grid, or a network without a state relation.
+        """
+        values = np.asarray(getattr(fields, "values", fields))
+        if values.shape != (4, *self.grid.shape):
+            raise ValueError(f"fields must have shape {(4, *self.grid.shape)} (on the network's "
+                             f"grid); got {values.shape}")
+        self.offset = torch.as_tensor(self.preactivations(values)[None],
+                                      dtype=self.lower.dtype, device=self.lower.device)
+        with torch.no_grad():
+            self.mlp[-1].weight.zero_()
+            self.mlp[-1].bias.zero_()
+
+    def _offset_at(self, points: torch.Tensor) -> torch.Tensor:
+        """The offset buffer at points ``(N, 3)`` in m, trilinear: shape ``(N, n_outputs)``."""
+        # grid_sample's last coordinate indexes the input's first spatial axis
+        grid = self.unit(points).flip(-1).reshape(1, -1, 1, 1, 3)
+        values = torch.nn.functional.grid_sample(self.offset, grid, mode="bilinear",
+                                                 padding_mode="border", align_corners=False)
+        return values.reshape(self.offset.shape[1], -1).T
 
     def normalized(self, points: torch.Tensor) -> torch.Tensor:
         """Normalized fields :math:`u = f / s` at points ``(..., 3)``: shape ``(4, ...)``."""
@@ -277,7 +364,8 @@ def pretrain(network: FieldNetwork, target, iterations: int = 2000, lr: float = 
     batch = min(int(batch_size), points.shape[0])
     optimizer = torch.optim.Adam(network.parameters(), lr=lr)
     losses = np.empty(int(iterations))
-    for k in tqdm(range(int(iterations)), disable=not progress, desc="pretrain neural field"):
+    for k in progress_bar(range(int(iterations)), disable=not progress,
+                          desc="pretrain neural field"):
         index = torch.randperm(points.shape[0], generator=generator,
                                device="cpu")[:batch].to(points.device)
         optimizer.zero_grad()
@@ -286,3 +374,14 @@ def pretrain(network: FieldNetwork, target, iterations: int = 2000, lr: float = 
         optimizer.step()
         losses[k] = loss.item()
     return losses
+
+
+def start_network(network: FieldNetwork, fields, offset: bool, iterations: int, lr: float,
+                  seed: int, progress: bool) -> None:
+    """Start ``network`` at voxel fields: offset by them (:meth:`FieldNetwork.offset_by`) when
+    ``offset``, else pretrained on them (:func:`pretrain` with ``iterations``, ``lr``, ``seed``
+    and ``progress``)."""
+    if offset:
+        network.offset_by(fields)
+    else:
+        pretrain(network, fields, iterations, lr, seed, progress=progress)

@@ -4,7 +4,7 @@ Every sub-ray of a pixel is rendered coarse to fine: stratified samples on its c
 the domain box, fields from a coarse field function; more samples drawn by inverse CDF from
 the coarse samples' emission weights (:mod:`~invflame.representations.neural.sampling`),
 fields from a fine field function; each set of samples is a piecewise-homogeneous ray whose
-radiance the JAX emission kernel (:func:`operators.emission_rte.emission_radiance`, through
+radiance the JAX emission kernel (:func:`operators.rte.kernel.emission_radiance`, through
 :func:`operators.torch_bridge.torch_function`) computes, the coarse and the fine sets of a
 batch in one kernel call. A pixel's spectrum is the mean of its sub-rays' radiance convolved
 with the instrument lineshape.
@@ -31,8 +31,8 @@ from invflame.representations.neural.sampling import (
     sample_lengths,
     stratified,
 )
-from operators.emission_rte import batch_rays_for, emission_radiance, emission_radiance_jvp
 from operators.interop import TORCH_DTYPES, to_jax, to_torch
+from operators.rte import batch_rays_for, emission_radiance, emission_radiance_jvp
 from operators.torch_bridge import torch_function
 
 POINTS_PER_CALL = 2**17

@@ -9,6 +9,8 @@ import pytest
 from invflame.cli import main
 from invflame.experiments import config, runner
 from invflame.experiments.run_folder import INCOMPLETE, LOCK
+from invflame.geometry import VoxelGrid
+from invflame.phantoms import make_phantom
 
 TINY = {
     "truth": {"grid": 8, "source": "synthetic"},
@@ -100,10 +102,12 @@ def test_resume_and_overwrite_exclude_each_other(tmp_path, capsys):
 def test_overwrite_keeps_the_results_when_the_truth_cannot_load(tmp_path, capsys):
     files = finished_run(tmp_path / "run")
     torn = tmp_path / "truth.npz"
-    torn.write_bytes(b"PK\x03\x04 torn")
+    make_phantom("synthetic", grid=VoxelGrid.poolfire(8)).save(torn)
     cfg = write_config(tmp_path / "c.toml", truth={"grid": 8, "source": str(torn)})
+    torn.write_bytes(b"PK\x03\x04 torn")  # torn after the configuration was written
     assert main(["run", cfg, "--out", str(tmp_path / "run"), "--overwrite", "--quiet"]) == 2
-    assert f"{torn} is damaged or incomplete" in one_error(capsys)
+    assert f"'truth.source' = '{torn}': field file {torn} is damaged or incomplete" in \
+        one_error(capsys)
     kept = contents(tmp_path / "run")
     assert {name: kept[name] for name in files} == files and LOCK not in kept
 

@@ -81,22 +81,23 @@ def test_sweep_keeps_results_and_reports_a_failing_run(client, tmp_path, capsys)
     base.write_text(BASE)
     out = tmp_path / "sweep"
     code = command(sweep, ["sweep", str(base), "--param",
-                           f"truth.source=synthetic,{tmp_path / 'missing.npz'}",
-                           "--param", "regularizer.kind=tv", "--out", str(out),
+                           "noise.kind=snr,none",  # 'discrepancy' refuses noise-free data
+                           "--param", "regularizer.lambda=discrepancy", "--out", str(out),
                            "--scheduler", client.scheduler.address, "--quiet"])
     assert code == 1
-    assert "FAILED truth.source=" in capsys.readouterr().err
+    assert "FAILED noise.kind=none" in capsys.readouterr().err
     with open(out / "summary.csv") as handle:
         rows = list(csv.DictReader(handle))
     assert [r["status"] for r in rows] == ["ok", "failed"]
     good, bad = (out / r["run"] for r in rows)
     assert (good / "summary.json").is_file() and (good / "reconstruction.npz").is_file()
     assert float(rows[0]["MSE_T"]) > 0 and rows[0]["error"] == ""
-    assert "neither 'poolfire', 'synthetic'" in rows[1]["error"]
+    assert "needs data with a noise σ" in rows[1]["error"]
     assert rows[1]["attempts"] == "2"  # the default retry ran, and failed again
     assert (bad / FAILURES).read_text().count("--- attempt failed") == 2
     assert "| failed |" in (out / "summary.md").read_text()
-    assert json.loads((out / "sweep.json").read_text())["params"]["regularizer.kind"] == ["tv"]
+    assert json.loads((out / "sweep.json").read_text())["params"]["regularizer.lambda"] == [
+        "discrepancy"]
 
 
 def test_run_jobs_resume_returns_finished_runs(client, tmp_path):

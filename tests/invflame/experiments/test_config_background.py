@@ -3,11 +3,12 @@
 import numpy as np
 import pytest
 
-from invflame.background import BlackbodyWall, MeasuredBackground, write_background
+from invflame.background import BlackbodyWall, MeasuredBackground
+from invflame.background_file import write_background
 from invflame.errors import ConfigError
 from invflame.experiments import config, runner
 from invflame.phantoms import make_phantom
-from operators.planck import planck
+from operators.rte.planck import planck
 
 SMALL = {"truth": {"source": "synthetic", "grid": 4}, "rig": {"pixels": 3, "rays_per_pixel": 1},
          "spectrum": {"min": 660.0, "max": 690.0, "step": 0.1},

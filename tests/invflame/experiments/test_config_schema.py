@@ -6,10 +6,13 @@ import re
 import tomllib
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from invflame.cli import main
 from invflame.experiments import config
+from invflame.field import Field
+from invflame.geometry import VoxelGrid
 
 KEYS = [pytest.param(section, name, key, id=f"{section}.{name}" if section else name)
         for section, name, key in config.keys()]
@@ -51,7 +54,10 @@ def test_show_defaults_is_toml_that_reads_back_to_the_defaults(capsys):
         assert comment.endswith(f"; allowed: {config.allowed(key, f'{section}.{name}')}")
 
 
-def test_a_checked_file_is_printed_complete_and_reads_back(tmp_path, capsys):
+def test_a_checked_file_is_printed_complete_and_reads_back(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # the truth file's name: quotes, backslashes, non-ASCII
+    values = np.stack([np.full((4, 4, 4), 1000.0), *np.full((3, 4, 4, 4), 0.1)])
+    Field(VoxelGrid.poolfire(4), values).save('C:\\fields\\"flame" λ.npz')
     path = tmp_path / "run.toml"
     path.write_text("""
 seed = 4

@@ -110,3 +110,30 @@ def test_resume_of_a_finished_run_checks_truth_and_code_not_only_the_configurati
     assert "data sha256" not in message  # simulated data follow from what is checked
     forced = runner.run_experiment(cfg, tmp_path, resume=True, progress=False, force=True)
     assert forced == finished
+
+
+def test_resume_continues_a_finished_run_to_a_raised_limit(tmp_path):
+    """A run that stopped at its limit continues to a higher one where it stopped, as the
+    uninterrupted run of that length would; the same limit returns it as it is."""
+    short = config.validate(dict(TINY, solver=dict(TINY["solver"], iterations=3)))
+    runner.run_experiment(short, tmp_path / "cut", progress=False)
+    assert runner.run_experiment(short, tmp_path / "cut", resume=True,
+                                 progress=False)["resumed"] is None
+    continued = runner.run_experiment(config.validate(TINY), tmp_path / "cut", resume=True,
+                                      progress=False)
+    assert continued["iterations"] == 6 and continued["resumed"]["from_iteration"] == 3
+    whole = runner.run_experiment(config.validate(TINY), tmp_path / "whole", progress=False)
+    assert continued["loss"]["final"] == pytest.approx(whole["loss"]["final"], rel=1e-5)
+
+
+def test_resume_refuses_a_limit_below_the_iterations_done(tmp_path):
+    runner.run_experiment(config.validate(TINY), tmp_path, progress=False)
+    lower = config.validate(dict(TINY, solver=dict(TINY["solver"], iterations=4)))
+    refusal = (r"cannot resume .*: it has done 6 epochs, but 'solver.iterations' = 4 now stops "
+               r"it before them: set solver.iterations to at least 6")
+    with pytest.raises(config.ConfigError, match=refusal):  # finished
+        runner.run_experiment(lower, tmp_path, resume=True, progress=False)
+    (tmp_path / "summary.json").unlink()  # as if killed after its last checkpoint
+    with pytest.raises(config.ConfigError, match=refusal):
+        runner.run_experiment(lower, tmp_path, resume=True, progress=False)
+    assert not (tmp_path / "summary.json").exists()

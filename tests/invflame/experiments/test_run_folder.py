@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from invflame.atomic_files import CorruptFileError
-from invflame.errors import GeometryError, OutputError
+from invflame.errors import ConfigError, GeometryError, InputDataError, OutputError
 from invflame.experiments import config, run_folder, runner, summaries
 from invflame.experiments.run_folder import INCOMPLETE, LOCK, RunLock
 from invflame.field import Field
@@ -109,13 +109,15 @@ def test_a_damaged_field_file_is_named(tmp_path, damage):
     path = tmp_path / "truth.npz"
     Field(VoxelGrid.poolfire(4), make_phantom("synthetic").resample(VoxelGrid.poolfire(4))
           .values).save(path)
+    cfg = config.validate({**TINY, "truth": {"grid": 8, "source": str(path)}})
     whole = path.read_bytes()
     path.write_bytes(whole[: len(whole) // 2] if damage is None else damage)
     with pytest.raises(CorruptFileError, match=f"field file {path} is damaged or incomplete"):
         Field.load(path)
-    cfg = config.validate({**TINY, "truth": {"grid": 8, "source": str(path)}})
-    with pytest.raises(CorruptFileError, match=str(path)):
+    with pytest.raises(InputDataError, match=f"'truth.source' = '{path}': field file {path}"):
         runner.load_truth(cfg)
+    with pytest.raises(ConfigError, match=f"'truth.source' = '{path}': field file {path}"):
+        config.validate(cfg)
 
 
 def test_cameras_inside_the_grid_are_a_geometry_error():

@@ -54,9 +54,13 @@ def test_interrupted_run_resumes_to_the_same_result(tmp_path):
 
 
 def test_unknown_truth_file_is_a_clear_error(tmp_path):
+    with pytest.raises(config.ConfigError, match="'truth.source' = 'nope.npz' is neither "
+                                                 "'poolfire', 'synthetic'"):
+        tiny(truth={"grid": 8, "source": "nope.npz"})
+    gone = tiny()  # a file removed after its configuration was checked
+    gone["truth"]["source"] = "nope.npz"
     with pytest.raises(FileNotFoundError, match="neither 'poolfire', 'synthetic'"):
-        runner.run_experiment(tiny(truth={"grid": 8, "source": "nope.npz"}), tmp_path,
-                              progress=False)
+        runner.run_experiment(gone, tmp_path, progress=False)
 
 
 def test_reproduce_writes_table_and_figures(tmp_path, monkeypatch):

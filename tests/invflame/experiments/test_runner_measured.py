@@ -8,9 +8,9 @@ import pytest
 from invflame.cli import main
 from invflame.errors import ConfigError, InputDataError
 from invflame.experiments import config, runner
-from invflame.experiments.measurement import Measurement
 from invflame.geometry import VoxelGrid, paper_rig
 from invflame.geometry.rig_file import rig_records, write_rig
+from invflame.measurement import Measurement
 from invflame.measurement_file import MeasurementFile, read_measurement, write_measurement
 
 SPECTRUM = {"min": 660.0, "max": 690.0, "step": 0.1}

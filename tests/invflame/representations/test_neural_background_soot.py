@@ -7,7 +7,7 @@ import torch
 import operators
 from invflame.background import MeasuredBackground
 from invflame.representations.neural import NeuralFieldRepresentation, NeuralRenderer
-from operators.planck import planck
+from operators.rte.planck import planck
 
 from .test_neural_rendering import _voxel_lookup
 

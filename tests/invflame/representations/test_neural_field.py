@@ -13,6 +13,7 @@ from invflame.representations.neural.network import (
     pretrain,
 )
 from invflame.representations.normalization import SCALES
+from invflame.representations.state_relation import StateRelation
 
 GRID = VoxelGrid.poolfire(8)
 
@@ -87,3 +88,40 @@ def test_pretraining_fits_the_target_field(plume):
 def test_pretraining_rejects_a_field_on_another_grid(plume):
     with pytest.raises(ValueError, match="target must have shape"):
         pretrain(FieldNetwork(VoxelGrid.poolfire(4)), plume, iterations=1, progress=False)
+
+
+def _relation_fields():
+    relation = StateRelation([300.0, 4e-4, 0.01, 2e-6])
+    rng = np.random.default_rng(5)
+    progress = rng.uniform(0.05, 0.5, GRID.shape)
+    progress[:2] = 0.0  # ambient air
+    fields = np.stack(relation.states(progress, rng.uniform(0.5, 1.8, GRID.shape)))
+    return relation, fields
+
+
+def test_a_network_offset_by_fields_starts_at_them_and_interpolates_between_centres():
+    relation, fields = _relation_fields()
+    network = FieldNetwork(GRID, 4, seed=1, dtype=torch.float64, state_relation=relation)
+    network.offset_by(fields)
+    out = network(centre_points(GRID, torch.float64)).detach().numpy()
+    s, h = relation.invert(fields)
+    margin = relation.progress_max * network_module.OFFSET_MARGIN
+    expected = np.stack(relation.states(np.maximum(s, margin), h))
+    np.testing.assert_allclose(out, expected, rtol=1e-10, atol=1e-12)
+    assert np.all(np.abs(out[0][2:] - fields[0][2:]) < 1e-8)  # exact inside the flame
+    assert np.all(out[0][:2] - 300.0 < 3.0)  # air stays within a few K of ambient
+    centres = centre_points(GRID, torch.float64)
+    between = 0.25 * centres[1, 2, 3] + 0.75 * centres[2, 2, 3]
+    pre = network.preactivations(fields)
+    np.testing.assert_allclose(network._offset_at(between[None]).numpy()[0],
+                               0.25 * pre[:, 1, 2, 3] + 0.75 * pre[:, 2, 2, 3], rtol=1e-12)
+    last = network.mlp[-1]
+    assert not last.weight.any() and not last.bias.any()
+
+
+def test_offset_needs_a_state_relation_and_fields_on_the_grid():
+    relation, fields = _relation_fields()
+    with pytest.raises(ValueError, match="state relation"):
+        FieldNetwork(GRID).offset_by(fields)
+    with pytest.raises(ValueError, match="on the network's grid"):
+        FieldNetwork(GRID, state_relation=relation).offset_by(fields[:, :4])

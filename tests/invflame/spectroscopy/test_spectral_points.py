@@ -8,8 +8,8 @@ from scipy import constants
 from invflame.spectroscopy.absorption_table import AbsorptionTable
 from invflame.spectroscopy.spectral_points import fine_grid, plan_points, points_of
 from operators.base import precision
-from operators.planck import planck
-from operators.rte_kernel import emission_radiance
+from operators.rte.kernel import emission_radiance
+from operators.rte.planck import planck
 
 ATM = 101325.0
 GRID = 690.0 + 0.04 * np.arange(251)  # 690-700 cm-1

@@ -26,11 +26,11 @@ SUBSAMPLES = 16
 
 
 @pytest.fixture(scope="module")
-def hapi_case(shared_linedata, tmp_path_factory):
+def hapi_case(h2o_par, tmp_path_factory):
     """HAPI with two local tables: the H2O lines as they are, and the same without shifts."""
     hapi = hapi_module()
     folder = tmp_path_factory.mktemp("hapi")
-    lines = read_par(shared_linedata / "H2O_HITRAN2012_600-800.par")
+    lines = read_par(h2o_par)
     unshifted = dataclasses.replace(lines, delta_air=np.zeros(len(lines)))
     for name, table in [("h2o", lines), ("h2o_unshifted", unshifted)]:
         write_par(table, folder / f"{name}.data")

@@ -10,8 +10,8 @@ from invflame.spectroscopy.linelist import read_par
 from invflame.spectroscopy.partition import hapi_module
 
 
-def test_fetch_hitran_reads_what_hapi_writes(shared_linedata, monkeypatch):
-    source = shared_linedata / "H2O_HITRAN2012_600-800.par"
+def test_fetch_hitran_reads_what_hapi_writes(h2o_par, monkeypatch):
+    source = h2o_par
     hapi = hapi_module()
     calls = []
 

@@ -8,8 +8,6 @@ import pytest
 from invflame.errors import InputDataError
 from invflame.spectroscopy.linelist import LineList, read_par, write_par
 
-H2O_FILE = "H2O_HITRAN2012_600-800.par"
-
 
 def assert_same_lines(a: LineList, b: LineList):
     assert len(a) == len(b)
@@ -18,8 +16,8 @@ def assert_same_lines(a: LineList, b: LineList):
 
 
 @pytest.fixture(scope="module")
-def h2o(shared_linedata):
-    return read_par(shared_linedata / H2O_FILE)
+def h2o(h2o_par):
+    return read_par(h2o_par)
 
 
 def test_read_h2o_file(h2o):
@@ -38,12 +36,12 @@ def test_read_h2o_file(h2o):
     assert h2o.delta_air[1] == -0.0016
 
 
-def test_round_trip_keeps_every_field(h2o, shared_linedata, tmp_path):
+def test_round_trip_keeps_every_field(h2o, h2o_par, tmp_path):
     out = tmp_path / "copy.par"
     write_par(h2o, out)
     assert_same_lines(read_par(out), h2o)
     # columns the LineList holds are written byte for byte as in the original
-    original = (shared_linedata / H2O_FILE).read_text().splitlines()
+    original = (h2o_par).read_text().splitlines()
     written = out.read_text().splitlines()
     assert all(len(line) == 160 for line in written)
     assert [line[:127] + line[146:] for line in written] == [
@@ -63,21 +61,21 @@ def test_write_is_atomic_and_rejects_values_that_do_not_fit(h2o, tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["lines.par"]
 
 
-def test_window_filter_in_reader_matches_window_method(h2o, shared_linedata):
-    windowed = read_par(shared_linedata / H2O_FILE, nu_range=(650.0, 725.0))
+def test_window_filter_in_reader_matches_window_method(h2o, h2o_par):
+    windowed = read_par(h2o_par, nu_range=(650.0, 725.0))
     assert len(windowed) == 628
     assert windowed.nu.min() >= 650.0 and windowed.nu.max() <= 725.0
     assert_same_lines(windowed, h2o.window(650.0, 725.0))
 
 
 @pytest.mark.parametrize("chunk_lines", [1, 7, 1649, 1650, 1651])
-def test_chunk_boundaries_do_not_change_the_result(h2o, shared_linedata, chunk_lines):
-    lines = read_par(shared_linedata / H2O_FILE, nu_range=(690.0, 700.0), chunk_lines=chunk_lines)
+def test_chunk_boundaries_do_not_change_the_result(h2o, h2o_par, chunk_lines):
+    lines = read_par(h2o_par, nu_range=(690.0, 700.0), chunk_lines=chunk_lines)
     assert_same_lines(lines, h2o.window(690.0, 700.0))
 
 
-def test_malformed_record_names_file_line_and_field(shared_linedata, tmp_path):
-    records = (shared_linedata / H2O_FILE).read_text().splitlines()[:10]
+def test_malformed_record_names_file_line_and_field(h2o_par, tmp_path):
+    records = h2o_par.read_text().splitlines()[:10]
     bad_number = records[6][:3] + "   abc.defgh" + records[6][15:]
     short = records[8][:150]
     path = tmp_path / "bad.par"
@@ -125,9 +123,9 @@ def test_linelist_validates_lengths_and_concatenates(h2o):
     ("gamma_air", (36, 40), "-.070", "-0.07"),
     ("nu", (4, 15), "         inf", "inf"),
 ])
-def test_unphysical_values_are_refused_with_their_line(shared_linedata, tmp_path, field,
+def test_unphysical_values_are_refused_with_their_line(h2o_par, tmp_path, field,
                                                        columns, text, shown):
-    source = (shared_linedata / "H2O_HITRAN2012_600-800.par").read_text().splitlines()[:5]
+    source = h2o_par.read_text().splitlines()[:5]
     first, last = columns
     source[3] = source[3][: first - 1] + text + source[3][last:]
     path = tmp_path / "bad.par"

@@ -21,14 +21,14 @@ from invflame.spectroscopy.line_parameters import (
 )
 from invflame.spectroscopy.linelist import LineList, read_par
 from invflame.spectroscopy.partition import hapi_module, partition_function
-from operators.planck import planck
+from operators.rte.planck import planck
 
 ATM = 101325.0
 
 
 @pytest.fixture(scope="module")
-def h2o(shared_linedata):
-    return read_par(shared_linedata / "H2O_HITRAN2012_600-800.par")
+def h2o(h2o_par):
+    return read_par(h2o_par)
 
 
 def one_line(nu=690.0, s296=1e-20, gamma_air=0.07, gamma_self=0.09, n_air=0.7, e_lower=500.0,

@@ -9,7 +9,7 @@ from invflame.spectroscopy.absorption_table import AbsorptionTable, default_line
 from invflame.spectroscopy.cross_section import cross_section
 from invflame.spectroscopy.linelist import LineList, read_par, write_par
 from invflame.spectroscopy.table_accuracy import spline_error
-from operators.planck import planck
+from operators.rte.planck import planck
 
 ATM = 101325.0
 GRID = 690.0 + 0.04 * np.arange(251)  # 690-700 cm-1, small and fast
