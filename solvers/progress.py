@@ -49,6 +49,7 @@ def progress_bar(iterable=None, **kwargs) -> tqdm:
     stream = kwargs.pop("file", None) or sys.stderr
     if not getattr(stream, "isatty", lambda: False)():
         kwargs.setdefault("mininterval", LOG_INTERVAL)
+        kwargs.setdefault("maxinterval", max(LOG_INTERVAL, kwargs["mininterval"]))
         kwargs.update(file=_Lines(stream), ascii=True, dynamic_ncols=False, ncols=100)
     else:
         kwargs["file"] = stream

@@ -39,7 +39,6 @@ Presets
 from __future__ import annotations
 
 import copy
-import time
 from functools import partial
 from pathlib import Path
 
@@ -221,6 +220,7 @@ def reproduce(preset: str = "quick", out_dir="results", resume: bool = False,
     from invflame.experiments.figures import comparison_figures
     from invflame.experiments.inputs import absorption_table, load_truth
     from invflame.experiments.resume import check_resumable
+    from invflame.experiments.run_log import StageClock
     from invflame.experiments.runner import build_scene, initial_fields, measure, run_experiment
 
     out = Path(out_dir)
@@ -228,7 +228,7 @@ def reproduce(preset: str = "quick", out_dir="results", resume: bool = False,
     methods = list(METHODS) if methods is None else list(methods)
     configs = {m: method_config(preset, m, seed, protocol, truth) for m in methods}
     first = next(iter(configs.values()))
-    begin = time.perf_counter()
+    clock = StageClock()
     notes = []  # what making the shared start said, for log.txt
     pending = [m for m in methods if not (resume and (out / folder_name(m) / "summary.json")
                                           .is_file())]
@@ -243,6 +243,7 @@ def reproduce(preset: str = "quick", out_dir="results", resume: bool = False,
             raw = dict(first, init=dict(first["init"], calibrate=False))
             Field(scene.grid, initial_fields(raw, None, scene, measurement),
                   {"source": "band tomography before calibration"}).save(out / UNCALIBRATED)
+        clock.lap("shared tables, data and start")
     summaries = {}
     for method, cfg in configs.items():
         folder = out / folder_name(method)
@@ -251,6 +252,7 @@ def reproduce(preset: str = "quick", out_dir="results", resume: bool = False,
             summaries[method] = read_json(folder / "summary.json")
             continue
         summaries[method] = run(cfg, folder, resume, progress)
+        clock.lap(method)
     rows = table_rows(summaries)
     base = next((m for m in methods if m.startswith("VG")), methods[0])
     truth_field = Field.load(out / folder_name(base) / "truth.npz")
@@ -268,9 +270,13 @@ def reproduce(preset: str = "quick", out_dir="results", resume: bool = False,
             + findings(rows, baselines))
     write_text(out / "table.md", text)
     comparison_figures(out, {m: out / folder_name(m) for m in methods})
+    clock.lap("table and figures")
+    stages = [clock.table()] + [f"{method}: {StageClock.table_of(summary['stages'])}"
+                                for method, summary in summaries.items() if "stages" in summary]
     write_text(out / "log.txt", "".join(f"{note}\n" for note in notes)
                + f"preset {preset}, protocol {protocol}, truth {truth}, seed {seed}, methods "
-               f"{methods}, {time.perf_counter() - begin:.1f} s\n")
+               f"{methods}, {sum(clock.seconds.values()):.1f} s\n"
+               + "".join(f"{line}\n" for line in stages))
     if progress:
-        print(text)
+        print(text + "\n" + "\n".join(stages))
     return rows

@@ -221,8 +221,10 @@ class RunLock:
     link to a file that already holds this process's id and host; a stale lock is removed
     first, by one process at a time, :meth:`_take_over_if_stale`) and writes
     :data:`INCOMPLETE`. On exit: releases the lock; :data:`INCOMPLETE` stays unless
-    :meth:`complete` was called. A lock written on another host is never taken over (its
-    process cannot be checked from here).
+    :meth:`complete` was called, or the folder held a finished run on entry whose
+    :data:`SUMMARY` is still there unchanged (a refused ``--resume`` leaves a finished run
+    finished). A lock written on another host is never taken over (its process cannot be
+    checked from here).
 
     Parameters
     ----------
@@ -233,6 +235,7 @@ class RunLock:
     def __init__(self, folder):
         self.folder = Path(folder)
         self.lock = self.folder / LOCK
+        self._finished = None  # the finished run's summary on entry: (mtime_ns, size)
 
     def __enter__(self) -> RunLock:
         output_folder(self.folder)
@@ -249,6 +252,8 @@ class RunLock:
                     self._take_over_if_stale()
         finally:
             os.unlink(mine)
+        if not (self.folder / INCOMPLETE).exists():
+            self._finished = _summary_stamp(self.folder)
         write_text(self.folder / INCOMPLETE,
                    "The outputs in this folder are partial: a run is writing them, or it was "
                    "interrupted. Continue it with invflame run --resume, or run it again with "
@@ -298,4 +303,15 @@ class RunLock:
         (self.folder / INCOMPLETE).unlink(missing_ok=True)
 
     def __exit__(self, *exc) -> None:
+        if self._finished is not None and _summary_stamp(self.folder) == self._finished:
+            self.complete()
         self.lock.unlink(missing_ok=True)
+
+
+def _summary_stamp(folder: Path) -> tuple[int, int] | None:
+    """Modification time (ns) and size of a folder's :data:`SUMMARY`, or None without one."""
+    try:
+        stat = (folder / SUMMARY).stat()
+    except FileNotFoundError:
+        return None
+    return stat.st_mtime_ns, stat.st_size

@@ -6,9 +6,11 @@ r"""One reconstruction from a configuration: scene, data, representation, solver
 ``config.toml``        the complete configuration (defaults filled in) with its seed; with
                        ``data.source``, a comment on top gives the measurement file's
                        instrument, which the run uses in place of ``[instrument]``
-``summary.json``       metrics (normalized MSE and PSNR per field, time per iteration, memory)
-                       and the machine that computed them
-                       (:func:`~invflame.experiments.machine.describe_machine`); with
+``summary.json``       metrics (normalized MSE and PSNR per field, time per iteration, memory),
+                       the wall time of each stage (``stages``, s: inputs, tables and scene;
+                       data; start; choice of λ; solve; outputs) and the machine that
+                       computed them (:func:`~invflame.experiments.machine.describe_machine`);
+                       with
                        ``data.source``, ``measured_instrument``: the file's resolution,
                        apodization and wavenumbers, used in place of ``[instrument]``
 ``history.csv``        per-iteration loss, data misfit, regularizer, gradient norm, wall time
@@ -52,7 +54,6 @@ the wavenumbers).
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import numpy as np
@@ -81,6 +82,7 @@ from invflame.experiments.resume import (
     run_fingerprint,
 )
 from invflame.experiments.run_folder import CHECKPOINT, SUMMARY, RunLock
+from invflame.experiments.run_log import Log, StageClock
 from invflame.experiments.start import initial_fields
 from invflame.experiments.summaries import (
     chi2_per_value,
@@ -111,18 +113,6 @@ CHECKPOINT_EVERY = 10
 CHECKPOINT_SECONDS = 10.0
 
 
-class Log:
-    """Appends timestamped lines to ``log.txt`` (and prints them when ``echo``)."""
-
-    def __init__(self, path: Path, echo: bool = True):
-        self.path, self.echo, self.start = path, echo, time.perf_counter()
-
-    def __call__(self, message: str) -> None:
-        line = f"[{time.perf_counter() - self.start:8.1f} s] {message}"
-        with open(self.path, "a") as handle:
-            handle.write(line + "\n")
-        if self.echo:
-            print(line, flush=True)
 def build_scene(cfg: dict, table: AbsorptionTable | None = None,
                 measured: MeasurementFile | None = None, progress: bool = True) -> Scene:
     """The reconstruction scene of a configuration: grid (``[grid]``,
@@ -266,6 +256,7 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
     """The body of :func:`run_experiment`, in its locked output folder."""
     solver = cfg["solver"]
     summary_path, checkpoint = out / SUMMARY, out / CHECKPOINT
+    clock = StageClock()
     changed = check_resumable(cfg, out, force) if resume else []
     measured, native = read_data(cfg), load_truth(cfg)  # the files first: quick to refuse
     scene = build_scene(cfg, table, measured, progress)
@@ -288,9 +279,11 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
     log(f"scene: grid {scene.grid.shape}, {scene.n_rays} pixels x {scene.rays_per_pixel} "
         f"sub-rays, {scene.wavenumber.size} line-by-line points -> "
         f"{scene.out_wavenumber.size} output points; truth {cfg['truth']['source']}")
+    clock.lap("inputs, tables and scene")
     if measurement is None:
         measurement = (measure(cfg, scene, native, progress) if measured is None
                        else measured.measurement)
+        clock.lap("data")
     fingerprint = run_fingerprint(cfg, truth, measurement)
     if resume:
         changed += check_fingerprint(out, fingerprint, force)
@@ -307,6 +300,7 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
     machine = describe_machine(uses_torch=representation.kind != "voxel")
     log(f"computing on: {in_words(machine)}")
     x0 = starting_parameters(cfg, representation, start, progress)
+    clock.lap("start")
     start = physical_fields(scene, representation.fields(x0))
     if truth is None:
         (out / "truth.npz").unlink(missing_ok=True)
@@ -325,6 +319,7 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
                                + ("" if chosen["reached"] else " (criterion not reached: "
                                   "smallest misfit tried)"))
         log(f"regularizer weight: lambda {described['lambda']}")
+        clock.lap("choice of lambda")
     lam = regularizer_weight(cfg, scene, measurement, reg["lambda"])
     sigma = measurement.sigma if reg["scaling"] == "chi2" else None
     problem = representation.problem(measurement.data, regularizer=reg["kind"], lam=lam, x0=x0,
@@ -342,6 +337,7 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
     result = solvers.solve(problem, solver["name"], max_iter=solver["iterations"] * per_epoch,
                            callbacks=callbacks, seed=cfg["seed"], resume=resume_from,
                            **solver["options"])
+    clock.lap("solve")
     log(str(result))
 
     fields = physical_fields(scene, representation.fields(result.x))
@@ -382,6 +378,10 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
     }
     write_json(summary_path, summary)
     export_run(out)
+    clock.lap("outputs")
+    summary["stages"] = clock.seconds
+    write_json(summary_path, summary)
+    log(clock.table())
     scored = (f"MSE {summary['mse']} (start {summary['mse_initial']}); " if truth is not None
               else "no ground truth; ")
     log(f"{scored}{misfit_name(measurement.noisy)} "

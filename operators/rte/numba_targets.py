@@ -47,7 +47,7 @@ import numpy as np
 from operators.disk_cache import cache_dir
 from operators.rte import numba_arithmetic, xla_ffi
 from operators.rte.numba_source import TEMPLATE, gas_code
-from operators.rte.xla_ffi import HANDLER, register
+from operators.rte.xla_ffi import HANDLER, ffi_target
 
 __all__ = ["KINDS", "compiled_sweeps", "target"]
 
@@ -184,4 +184,4 @@ def target(kind: str, n_gas: int, n_tau: int, dtype) -> str:
     module = compiled_sweeps(int(n_gas), int(n_tau), dtype)
     numba.get_num_threads()  # starts Numba's threads, whose symbols a cached handler links to
     handler = numba.cfunc(HANDLER, cache=True)(getattr(module, f"{kind}_handler"))
-    return register(f"invflame_{kind}_{n_gas}_gases_{n_tau}_rows_{dtype}", handler)
+    return ffi_target(f"invflame_{kind}_{n_gas}_gases_{n_tau}_rows_{dtype}", handler)

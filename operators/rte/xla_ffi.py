@@ -6,7 +6,7 @@ on its own buffers: nothing is copied on the way in or out, where :func:`jax.pur
 copies every operand and result (a 30 MB result cost 3.6–4.4 ms, ``docs/performance.md``). A
 handler written with the functions here, compiled by :func:`numba.cfunc` with
 :data:`HANDLER`, reads its operands with :func:`argument` and writes its results into
-:func:`result`; :func:`register` makes it a target of :func:`jax.ffi.ffi_call`::
+:func:`result`; :func:`ffi_target` makes it a target of :func:`jax.ffi.ffi_call`::
 
     def double(frame):
         if executing(frame):
@@ -14,7 +14,7 @@ handler written with the functions here, compiled by :func:`numba.cfunc` with
             y[:] = 2 * x
         return no_error()
 
-    name = register("double", numba.cfunc(HANDLER)(double))
+    name = ffi_target("double", numba.cfunc(HANDLER)(double))
     jax.ffi.ffi_call(name, jax.ShapeDtypeStruct(x.shape, x.dtype))(x)
 
 The handler trusts its caller for the operands' count, ranks and dtypes (it reads the rank's
@@ -32,7 +32,7 @@ from numba.core import types
 from numba.extending import intrinsic, overload
 from numba.np.unsafe.ndarray import to_fixed_tuple
 
-__all__ = ["HANDLER", "argument", "executing", "no_error", "register", "result"]
+__all__ = ["HANDLER", "argument", "executing", "ffi_target", "no_error", "result"]
 
 #: The C signature of a handler: ``void* handler(void* frame)`` (the error, NULL on success).
 HANDLER = types.voidptr(types.voidptr)
@@ -134,7 +134,7 @@ def result(frame, i, ndim, dtype):
     return _buffer(frame, _RESULTS, i, ndim, dtype)
 
 
-def register(name: str, handler) -> str:
+def ffi_target(name: str, handler) -> str:
     """Register ``handler`` (a :func:`numba.cfunc` of :data:`HANDLER`) as the CPU target
     ``name`` of :func:`jax.ffi.ffi_call`, once per name; returns ``name``.
 

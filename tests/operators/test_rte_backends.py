@@ -8,8 +8,8 @@ forward-mode derivative (:func:`operators.rte.emission_radiance_jvp`) and the re
 Each is compared with the same quantity of the reference formal solution
 (:func:`rte_reference.reference_radiance`, float64, differentiated by JAX) on a random small
 scene: random segment counts (rays with padding, zero-length segments inside rays), lengths over
-three decades (optically thin to thick), temperatures across the tables, mole fractions, with and
-without soot and a background, rays in batches of a random size.
+three decades (optically thin to thick), temperatures across the tables, mole fractions, gas
+alone or gas with soot in front of a background, rays in batches of a random size.
 
 **Tolerance.** The kernel and the reference evaluate the same discrete model (the same
 cross-section spline, and for the spline backends the same Planck spline), on the same inputs
@@ -94,8 +94,8 @@ def directions(rng, mode, fields, lengths, dtype):
     return tuple(a.astype(dtype).astype(np.float64) for a in found)
 
 
-@pytest.mark.parametrize("with_background", [False, True], ids=["no background", "background"])
-@pytest.mark.parametrize("soot", [False, True], ids=["gas", "gas and soot"])
+@pytest.mark.parametrize(("soot", "with_background"), [(False, False), (True, True)],
+                         ids=["gas", "gas and soot before a background"])
 @pytest.mark.parametrize("mode", ["forward", "jvp", "vjp"])
 @pytest.mark.parametrize("dtype", [np.float32, np.float64], ids=["float32", "float64"])
 @pytest.mark.parametrize("sweeps, planck_mode", BACKENDS, ids=[f"{s}-{p}" for s, p in BACKENDS])

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from operators.base import precision
-from operators.rte.xla_ffi import HANDLER, argument, executing, no_error, register, result
+from operators.rte.xla_ffi import HANDLER, argument, executing, ffi_target, no_error, result
 
 
 def scaled_rows(frame):
@@ -31,7 +31,7 @@ HANDLER_SCALED_ROWS = numba.cfunc(HANDLER)(scaled_rows)
 
 
 def call_scaled_rows(x, factor, cube):
-    name = register("test_scaled_rows", HANDLER_SCALED_ROWS)
+    name = ffi_target("test_scaled_rows", HANDLER_SCALED_ROWS)
     shapes = (jax.ShapeDtypeStruct(x.shape, x.dtype), jax.ShapeDtypeStruct(x.shape[:1], x.dtype),
               jax.ShapeDtypeStruct(cube.shape, cube.dtype))
     return jax.jit(jax.ffi.ffi_call(name, shapes))(x, factor, cube)
@@ -58,10 +58,10 @@ def test_a_handler_takes_empty_operands_and_results():
 
 
 def test_a_name_is_registered_once_and_not_for_another_handler():
-    assert register("test_scaled_rows", HANDLER_SCALED_ROWS) == "test_scaled_rows"
-    assert register("test_scaled_rows", HANDLER_SCALED_ROWS) == "test_scaled_rows"
+    assert ffi_target("test_scaled_rows", HANDLER_SCALED_ROWS) == "test_scaled_rows"
+    assert ffi_target("test_scaled_rows", HANDLER_SCALED_ROWS) == "test_scaled_rows"
     with pytest.raises(ValueError, match="'test_scaled_rows' is registered with another"):
-        register("test_scaled_rows", numba.cfunc(HANDLER)(scaled_rows))
+        ffi_target("test_scaled_rows", numba.cfunc(HANDLER)(scaled_rows))
 
 
 def test_the_rank_of_an_operand_must_be_a_literal():

@@ -146,3 +146,24 @@ def test_a_rig_that_misses_the_grid_is_a_geometry_error():
                          [0.0, 1.0, 0.0], 0.5, (0.1, 0.1), (2, 2))
     with pytest.raises(GeometryError, match="no ray of the 1 camera\\(s\\) crosses the grid"):
         Scene(grid, CameraRig((away,)), table)
+
+
+def test_a_refused_resume_leaves_a_finished_run_finished(tmp_path):
+    (tmp_path / "summary.json").write_text("{}\n")
+    with pytest.raises(ValueError, match="refused"), RunLock(tmp_path):
+        assert (tmp_path / INCOMPLETE).is_file()  # while it is written
+        raise ValueError("refused: the configuration changed")
+    assert not (tmp_path / INCOMPLETE).exists() and not (tmp_path / LOCK).exists()
+
+
+@pytest.mark.parametrize("change", ["rewritten", "removed"])
+def test_a_finished_run_changed_by_a_failed_resume_is_marked_incomplete(tmp_path, change):
+    summary = tmp_path / "summary.json"
+    summary.write_text("{}\n")
+    with pytest.raises(KeyboardInterrupt), RunLock(tmp_path):
+        if change == "removed":
+            summary.unlink()
+        else:
+            summary.write_text('{"iterations": 5}\n')
+        raise KeyboardInterrupt
+    assert (tmp_path / INCOMPLETE).is_file()

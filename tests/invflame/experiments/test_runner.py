@@ -38,6 +38,10 @@ def test_run_writes_every_output_and_lowers_the_loss(tmp_path):
     recon = Field.load(tmp_path / "reconstruction.npz")
     assert recon.values.shape == (4, 8, 8, 8)
     assert config.load(tmp_path / "config.toml") == tiny(regularizer={"kind": "tv"})
+    stages = json.loads((tmp_path / "summary.json").read_text())["stages"]
+    assert list(stages) == ["inputs, tables and scene", "data", "start", "solve", "outputs"]
+    assert all(seconds >= 0 for seconds in stages.values()) and stages["solve"] > 0
+    assert "time by stage: inputs, tables and scene " in (tmp_path / "log.txt").read_text()
 
 
 def test_interrupted_run_resumes_to_the_same_result(tmp_path):
