@@ -7,7 +7,9 @@ Usage: python studies/lambda_sweep.py [--truth synthetic] [--method VG/TV]
 
 Runs the method of ``invflame study --preset quick`` (same data, start, solver and stopping
 rule; one measurement and one start shared by all λ) once per λ, then prints per λ the
-noise-weighted misfit χ²/M, the regularizer Φ, the normalized MSE of T over the domain and the
+noise-weighted misfit χ²/M (for a network, trained on a stochastic objective, that of its
+final rendering of all pixels), the regularizer Φ (not recorded for a network: nan), the
+normalized MSE of T over the domain and the
 flame and the hot-volume ratio, and which λ the discrepancy principle (τ = 1, and with
 ``--model-error`` τ = 1 + the model error of prior flames) and the L-curve pick from those same
 points, beside the best one against the truth. Choose λ on one truth and
@@ -17,6 +19,7 @@ report on another.
 import argparse
 import csv
 import json
+import math
 import tomllib
 import warnings
 from pathlib import Path
@@ -80,6 +83,8 @@ if __name__ == "__main__":
         with open(folder / "history.csv") as handle:
             last = list(csv.DictReader(handle))[-1]
         chi2, phi = float(last["misfit"]), float(last["regularizer"])
+        if not math.isfinite(chi2):  # a stochastic objective (networks) records no misfit
+            chi2 = summary["chi2_per_measurement"]["final"] * m
         points.append((lam, chi2, phi, summary["mse"]["T"]))
         print(f"| {lam:g} | {chi2 / m:.4g} | {phi:.4g} | {summary['mse']['T']:.5f} | "
               f"{summary['mse_flame']['T']:.4f} | {summary['hot_volume_ratio']:.2f} | "
