@@ -34,6 +34,7 @@ from operators.norm import operator_norm
 from operators.rte import EmissionRTE, RTETables, emission_radiance, emission_radiance_jvp
 from operators.rte.planck import planck
 from operators.sampling import VoxelSampling, sample_voxels
+from operators.screened_poisson import ScreenedPoissonSolve
 from operators.tabulated import PiecewiseCubic
 
 __all__ = [
@@ -56,6 +57,7 @@ __all__ = [
     "PiecewiseCubic",
     "RTETables",
     "RowMean",
+    "ScreenedPoissonSolve",
     "SquaredL2",
     "TorchOperator",
     "VoxelSampling",

@@ -64,6 +64,7 @@ def _registry():
         gradient_descent,
         jaxopt_lbfgs,
         pdhg,
+        preconditioned_lbfgs,
         registry,
         scipy_lbfgs,
     )

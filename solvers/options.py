@@ -10,10 +10,11 @@ lists every option with its type, default, unit and allowed range. A field is de
 
 Values are checked against the field's type (``float`` takes an int or a float, never a bool
 or a string; ``int`` takes an integral number; ``X | None`` also None; ``tuple[float, float]``
-a sequence of two numbers) and converted to it, then against the range. A bad value raises
-:class:`OptionError` naming the solver, the option, the value and what is allowed; an unknown
-option name lists the allowed ones. An options object reads like a dict (``o["lr"]``) and
-:meth:`SolverOptions.as_dict` gives the plain values stored in checkpoints.
+a sequence of two numbers; ``bool`` only True or False) and converted to it, then against the
+range. A bad value raises :class:`OptionError` naming the solver, the option, the value and
+what is allowed; an unknown option name lists the allowed ones. An options object reads like
+a dict (``o["lr"]``) and :meth:`SolverOptions.as_dict` gives the plain values stored in
+checkpoints.
 """
 
 from __future__ import annotations
@@ -74,7 +75,8 @@ def _type_name(hint) -> str:
         return f"tuple of {len(typing.get_args(hint))} numbers"
     if isinstance(hint, UnionType):
         return " or ".join(_type_name(h) for h in typing.get_args(hint))
-    return {float: "a number", int: "an integer", NoneType: "None"}.get(hint, str(hint))
+    return {float: "a number", int: "an integer", bool: "true or false",
+            NoneType: "None"}.get(hint, str(hint))
 
 
 def _convert(value, hint):
@@ -89,6 +91,10 @@ def _convert(value, hint):
     if hint is NoneType:
         if value is None:
             return None
+        raise ValueError
+    if hint is bool:
+        if isinstance(value, bool):
+            return value
         raise ValueError
     if isinstance(value, bool | str | bytes) or value is None:
         raise ValueError

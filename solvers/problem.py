@@ -171,12 +171,18 @@ class Problem:
     value_and_grad : callable, optional
         Stochastic override ``(theta, iteration, rng) -> (loss, grad)`` used by first-order
         solvers instead of the full objective.
+    preconditioner : operators.LinearOperator or callable, optional
+        A symmetric positive definite :math:`M` on the parameters (``forward.dims`` in and
+        out), shaped like the inverse of the objective's curvature (its scale does not
+        matter), for solvers that take one (``preconditioned-lbfgs``), or a function of no
+        arguments that builds it (or returns None) when a solver first asks; None: the
+        identity.
     """
 
     def __init__(self, forward: Operator, data, regularizer=None, lam: float = 1e-3,
                  lower=None, upper=None, x0=None, linearizable: bool = True, advice: str = "",
                  name: str | None = None, metadata: dict[str, Any] | None = None,
-                 value_and_grad=None):
+                 value_and_grad=None, preconditioner=None):
         if not isinstance(forward, Operator):
             raise TypeError(f"forward must be an operators.Operator, got "
                             f"{type(forward).__name__} (wrap functions with "
@@ -218,7 +224,30 @@ class Problem:
             raise TypeError("value_and_grad must be a callable (theta, iteration, rng) -> "
                             "(loss, grad)")
         self.value_and_grad = value_and_grad
+        if isinstance(preconditioner, Operator):
+            preconditioner = self._checked_preconditioner(preconditioner)
+        elif preconditioner is not None and not callable(preconditioner):
+            raise TypeError(f"preconditioner must be an operators.LinearOperator, a function "
+                            f"that builds one, or None; got {type(preconditioner).__name__}")
+        self._preconditioner = preconditioner
         self.x0 = None if x0 is None else self.check_point(x0, "x0")
+
+    @property
+    def preconditioner(self) -> Operator | None:
+        """The preconditioner :math:`M` (built on first use when given as a function), or
+        None."""
+        if self._preconditioner is not None and not isinstance(self._preconditioner, Operator):
+            built = self._preconditioner()
+            self._preconditioner = None if built is None else self._checked_preconditioner(built)
+        return self._preconditioner
+
+    def _checked_preconditioner(self, preconditioner: Operator) -> Operator:
+        if (tuple(preconditioner.dims) != tuple(self.dims)
+                or tuple(preconditioner.dimsd) != tuple(self.dims)):
+            raise ValueError(f"the preconditioner {preconditioner.name} maps "
+                             f"{preconditioner.dims} to {preconditioner.dimsd}; it must map the "
+                             f"parameters' shape {self.dims} to itself")
+        return preconditioner
 
     # -- parameters and bounds ---------------------------------------------------------------
     @property

@@ -81,10 +81,10 @@ class Rule:
 SQUARE = Rule(lambda n: round(n ** 0.5) ** 2 == n,
               "a perfect square k*k (k x k sub-rays per pixel: 1, 4, 9, 16, 25, ...)")
 POWER_OF_TWO = Rule(lambda n: n & (n - 1) == 0, "a power of two (1, 2, 4, 8, 16)")
-AMBIENT = Rule(lambda a: 150.0 < a[0] < 500.0 and all(0.0 <= x <= 1.0 for x in a[1:])
+AMBIENT = Rule(lambda a: 250.0 <= a[0] < 500.0 and all(0.0 <= x <= 1.0 for x in a[1:])
                and sum(a[1:]) < 1.0,
-               "[T in K (150-500), X_CO2, X_H2O, X_CH4] with mole fractions in [0, 1] summing "
-               "below 1")
+               "[T in K (250-500: the absorption tables start at 250 K), X_CO2, X_H2O, X_CH4] "
+               "with mole fractions in [0, 1] summing below 1")
 LOW_HIGH = Rule(lambda r: 0.0 < r[0] < r[1], "[low, high] with 0 < low < high")
 CELLS = ValueType("a list of 3 integers [nx, ny, nz], or [] for 'truth.grid' on every axis",
                   lambda v: isinstance(v, list) and len(v) in (0, 3) and all(

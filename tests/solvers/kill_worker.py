@@ -34,7 +34,7 @@ MODES = ("after-save", "before-save", "mid-write")
 SEED = 11
 OPTIONS = {"gd": {}, "adam": {"lr": 0.05}, "gauss-newton": {"damping": 1.0},
            "lbfgs": {"pgtol": 0.0, "ftol": 0.0}, "pdhg": {"inner_iter": 10},
-           "jaxopt-lbfgs": {}}
+           "jaxopt-lbfgs": {}, "preconditioned-lbfgs": {}}
 """Each solver's options; SciPy's own tests are off so that the stopping rule ends the run."""
 MAX_ITER = {"lbfgs": 200}
 """Iteration limits other than 12: SciPy's L-BFGS-B runs until the gradient test ends it."""

@@ -17,7 +17,8 @@ import solvers
 from solvers.checkpoint import save_checkpoint
 
 OPTIONS = {"gd": {}, "adam": {"lr": 0.05}, "gauss-newton": {}, "lbfgs": {},
-           "pdhg": {"inner_iter": 10}, "jaxopt-lbfgs": {}}
+           "pdhg": {"inner_iter": 10}, "jaxopt-lbfgs": {},
+           "preconditioned-lbfgs": {}}
 EXACT = [name for name in solvers.available() if solvers.get(name).exact_resume]
 
 
@@ -261,7 +262,8 @@ def test_a_run_killed_at_a_random_point_resumes_bit_for_bit(tmp_path, name):
     iteration = _kill_iteration(name, full.iterations, mode)
     path = tmp_path / "run.npz"
     _killed_run(name, path, iteration, mode)
-    saved = {"after-save": iteration, "before-save": iteration - iteration % 2,
+    # before-save dies at `iteration` before its save: the last even iteration below it
+    saved = {"after-save": iteration, "before-save": (iteration - 1) - (iteration - 1) % 2,
              "mid-write": iteration - 1}[mode]
     assert solvers.load_checkpoint(path).meta["iteration"] == saved
     resumed = solver.run(problem, resume=path)

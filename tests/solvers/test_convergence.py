@@ -15,6 +15,7 @@ OPTIONS = {
     "pdhg": {"max_iter": 20, "inner_iter": 100},
     "lbfgs": {"max_iter": 200, "ftol": 1e-15, "pgtol": 1e-12},
     "jaxopt-lbfgs": {"max_iter": 200, "tol": 1e-10},
+    "preconditioned-lbfgs": {"max_iter": 200, "gtol": 1e-10},
 }
 
 

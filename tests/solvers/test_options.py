@@ -57,6 +57,8 @@ def test_a_string_for_a_number_names_solver_option_value_and_type(name):
     ("gauss-newton", {"damping": 0}, "option 'damping' = 0 (int) must be > 0"),
     ("pdhg", {"tau": 0.1}, "option 'sigma' = None .* set both tau and sigma, or neither"),
     ("pdhg", {"tau": -1.0, "sigma": 1.0}, "option 'tau' = -1.0 .* None or > 0"),
+    ("preconditioned-lbfgs", {"precondition": 1}, "option 'precondition' = 1 (int) must be "
+                                                   "true or false"),
 ])
 def test_out_of_range_values_name_the_range(name, options, message):
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")

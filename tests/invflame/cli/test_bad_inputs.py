@@ -77,6 +77,8 @@ SPECIAL = [
     ("discrepancy with paper scaling", "regularizer",
      'lambda = "discrepancy"\nscaling = "paper"', ("regularizer.scaling",)),
     ("ambient too hot", "init", "ambient = [900.0, 0.0, 0.0, 0.0]", ("init.ambient",)),
+    ("ambient below the tables", "init", "ambient = [200.0, 0.0, 0.0, 0.0]",
+     ("init.ambient", "250 K")),
     ("ambient too short", "init", "ambient = [300.0]", ("init.ambient",)),
     ("rays_per_pixel not square", "rig", "rays_per_pixel = 8", ("rig.rays_per_pixel",)),
     ("nesr negative", "noise", "nesr = -1e-3", ("noise.nesr",)),

@@ -1,0 +1,122 @@
+r"""What a voxel fit scores when its objective changes: a likelihood with the model error, a
+pull toward the start, another start, another solver.
+
+Usage: python studies/objective_variants.py [--truth poolfire] [--method VG/Tikh.]
+       [--lambdas 30] [--solver lbfgs] [--iterations 100] [--model-error N]
+       [--anchor VOXELS] [--start RUN]
+
+On the honest quick problem of one voxel method (:func:`invflame.experiments.method_problem`:
+the study's data, calibrated start and λ scale), solves for each λ from the start with the
+study's plateau rule and prints χ²/M of the likelihood fitted, the objective, MSE_T, the gain
+over the start, the hot-volume ratio, the iterations and why the solver stopped. Variants:
+
+``--model-error N``
+    The likelihood :math:`\sigma^2 = \mathrm{NESR}^2 + r(\nu)^2 d^2`: a relative model
+    error :math:`r(\nu)` per wavenumber, the root of
+    :math:`\sum (F_\text{fine} - F)^2 / \sum F^2` over ``N`` prior plumes rendered as the
+    data are and by the reconstruction model from their average on its grid
+    (:mod:`invflame.experiments.model_error`); :math:`d` the measured radiance (0 where
+    negative).
+``--anchor VOXELS``
+    The Tikhonov term plus a pull to the start, :math:`\mathrm{mean}(\lVert Du\rVert^2 +
+    \lVert u - u_0\rVert^2 / \ell^2)` with :math:`\ell` = VOXELS grid spacings.
+``--start RUN``
+    Start from the reconstruction of a run folder (gains stay against the study's start).
+"""
+
+import argparse
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+
+import operators as op
+import solvers
+from invflame.experiments.inputs import absorption_table
+from invflame.experiments.measurement import synthesis_scene
+from invflame.experiments.method_problem import method_problem
+from invflame.experiments.model_error import prior_flames
+from invflame.field import Field
+from invflame.geometry import VoxelGrid
+from invflame.representations.voxel import data_curvature
+
+
+def relative_model_error(setup, n_flames: int) -> np.ndarray:
+    r""":math:`r(\nu)^2` from ``n_flames`` prior plumes (dimensionless, per wavenumber)."""
+    cfg, scene = setup.cfg, setup.scene
+    table = absorption_table(cfg, cfg["spectrum"]["step"] / cfg["data"]["step_divisor"])
+    grid = scene.grid
+    fine_grid = VoxelGrid(grid.lower, grid.upper, tuple(2 * n for n in grid.shape),
+                          grid.up_axis)
+    squared, signal = 0.0, 0.0
+    for _, flame in prior_flames(fine_grid, n_flames, cfg["seed"]):
+        fine = synthesis_scene(scene, flame, table, cfg["data"]["rays_per_pixel"])
+        model = scene.simulate(flame.resample(grid).values)
+        difference = fine.with_background(scene.background).simulate(flame.values) - model
+        squared = squared + np.sum(difference**2, axis=0)
+        signal = signal + np.sum(model**2, axis=0)
+    return squared / signal
+
+
+def anchored(problem: solvers.Problem, spacing, voxels: float) -> solvers.Problem:
+    """``problem`` with its Tikhonov term joined by a pull to its start, and the screened
+    Laplacian of both as its preconditioner."""
+    dims = problem.dims
+    pull = 1.0 / (voxels * float(np.min(spacing)))
+    gradient = op.Gradient(dims, tuple(spacing), problem.dtype)
+    stacked = op.vstack([gradient, pull * op.Identity(dims, dtype=problem.dtype)])
+    offset = np.concatenate([np.zeros(int(np.prod(gradient.dimsd))),
+                             pull * np.ravel(problem.x0)]).astype(problem.dtype)
+    regularizer = op.Composite(op.SquaredL2(scale=1.0 / np.prod(dims),
+                                            offset=offset.reshape(stacked.dimsd)), stacked)
+    scale = problem.lam / np.prod(dims)
+    return solvers.Problem(
+        problem.forward, problem.data, regularizer=regularizer, lam=problem.lam,
+        lower=problem.lower, upper=problem.upper, x0=problem.x0,
+        name=f"{problem.name} + pull to the start",
+        preconditioner=lambda: op.ScreenedPoissonSolve(
+            dims, tuple(spacing), scale,
+            data_curvature(problem.forward, problem.x0) + scale * pull**2))
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(prog="objective_variants")
+    parser.add_argument("--truth", default="poolfire")
+    parser.add_argument("--method", default="VG/Tikh.", choices=("VG/NR", "VG/Tikh.", "VG/TV"))
+    parser.add_argument("--lambdas", type=float, nargs="+", default=[30.0])
+    parser.add_argument("--solver", default="lbfgs")
+    parser.add_argument("--iterations", type=int, default=100)
+    parser.add_argument("--model-error", type=int, default=0, metavar="N")
+    parser.add_argument("--anchor", type=float, default=None, metavar="VOXELS")
+    parser.add_argument("--start", type=Path, default=None, metavar="RUN")
+    args = parser.parse_args()
+    setup = method_problem(args.method, args.truth)
+    if args.anchor is not None and setup.cfg["regularizer"]["kind"] != "tikhonov":
+        parser.error("--anchor joins a Tikhonov term: give --method VG/Tikh.")
+    measurement = setup.measurement
+    if args.model_error:
+        r2 = relative_model_error(setup, args.model_error)
+        print(f"relative model error r: median {np.sqrt(np.median(r2)):.4f}, range "
+              f"{np.sqrt(r2.min()):.4f}-{np.sqrt(r2.max()):.4f}")
+        sigma = np.sqrt(np.broadcast_to(measurement.sigma, measurement.data.shape) ** 2
+                        + r2 * np.maximum(measurement.data, 0.0) ** 2)
+        measurement = dataclasses.replace(measurement, sigma=sigma)
+    x0 = (None if args.start is None else setup.representation.initial_parameters(
+        Field.load(args.start / "reconstruction.npz").values))
+    start_mse = setup.scores(setup.x0)["mse"]["T"]
+    print(f"{args.method} on {args.truth}, {args.solver}; the study's start MSE_T "
+          f"{start_mse:.5f}")
+    print("| λ | χ²/M | objective | MSE_T | gain | hot vol. | iterations | stopped by |")
+    print("|---:|---:|---:|---:|---:|---:|---:|---|")
+    m = measurement.n_measurements
+    for lam in args.lambdas:
+        problem = setup.problem(lam, measurement, x0)
+        if args.anchor is not None:
+            problem = anchored(problem, setup.scene.grid.spacing, args.anchor)
+        result = solvers.solve(problem, args.solver, max_iter=args.iterations,
+                               **setup.cfg["solver"]["options"])
+        scores = setup.scores(result.x)
+        misfit = problem.evaluate(result.x).misfit
+        print(f"| {lam:g} | {misfit / m:.4g} | {result.loss:.4g} | {scores['mse']['T']:.5f} | "
+              f"{start_mse / scores['mse']['T']:.2f} | {scores['hot_volume_ratio']:.2f} | "
+              f"{result.iterations} | {result.stop_reason.split(':')[0]} |", flush=True)
