@@ -3,7 +3,7 @@ pull toward the start, another start, another solver.
 
 Usage: python studies/objective_variants.py [--truth poolfire] [--method VG/Tikh.]
        [--lambdas 30] [--solver lbfgs] [--iterations 100] [--model-error N]
-       [--anchor VOXELS] [--start RUN]
+       [--anchor VOXELS] [--compact MU] [--start RUN]
 
 On the honest quick problem of one voxel method (:func:`invflame.experiments.method_problem`:
 the study's data, calibrated start and λ scale), solves for each λ from the start with the
@@ -20,6 +20,10 @@ over the start, the hot-volume ratio, the iterations and why the solver stopped.
 ``--anchor VOXELS``
     The Tikhonov term plus a pull to the start, :math:`\mathrm{mean}(\lVert Du\rVert^2 +
     \lVert u - u_0\rVert^2 / \ell^2)` with :math:`\ell` = VOXELS grid spacings.
+``--compact MU``
+    The Tikhonov term plus a cost of the progress, :math:`\mathrm{mean}(\lVert Du\rVert^2)
+    + \mu\,\mathrm{mean}(s)` over the parameters (:math:`s \ge 0`: an L1 norm that keeps
+    air at :math:`s = 0` and the flame compact).
 ``--start RUN``
     Start from the reconstruction of a run folder (gains stay against the study's start).
 """
@@ -39,6 +43,7 @@ from invflame.experiments.model_error import prior_flames
 from invflame.field import Field
 from invflame.geometry import VoxelGrid
 from invflame.representations.voxel import data_curvature
+from operators.functionals import namespace
 
 
 def relative_model_error(setup, n_flames: int) -> np.ndarray:
@@ -79,6 +84,42 @@ def anchored(problem: solvers.Problem, spacing, voxels: float) -> solvers.Proble
             data_curvature(problem.forward, problem.x0) + scale * pull**2))
 
 
+class SquaresThenSum(op.Functional):
+    r""":math:`c\,(\sum_{i < n} x_i^2 + \mu \sum_{i \ge n} x_i)` of a flat vector."""
+
+    def __init__(self, scale: float, n_squares: int, weight: float):
+        super().__init__(scale)
+        self.n_squares, self.weight = int(n_squares), float(weight)
+
+    def terms(self, x):
+        x = namespace(x).ravel(x)
+        return namespace(x).concatenate([x[:self.n_squares] ** 2,
+                                         self.weight * x[self.n_squares:]])
+
+    def grad(self, x):
+        xp = namespace(x)
+        flat = xp.ravel(x)
+        slope = xp.full(flat.shape[0] - self.n_squares, self.weight, flat.dtype)
+        return (self.scale * xp.concatenate([2.0 * flat[:self.n_squares], slope])).reshape(
+            x.shape)
+
+
+def compact(problem: solvers.Problem, spacing, weight: float) -> solvers.Problem:
+    """``problem`` with its Tikhonov term joined by ``weight`` times the mean progress (the
+    first field), its preconditioner kept."""
+    dims = problem.dims
+    gradient = op.Gradient(dims, tuple(spacing), problem.dtype)
+    progress = np.zeros(dims, problem.dtype)
+    progress[0] = 1.0
+    stacked = op.vstack([gradient, op.Diagonal(progress)])
+    functional = SquaresThenSum(1.0 / np.prod(dims), int(np.prod(gradient.dimsd)), weight)
+    return solvers.Problem(
+        problem.forward, problem.data, regularizer=op.Composite(functional, stacked),
+        lam=problem.lam, lower=problem.lower, upper=problem.upper, x0=problem.x0,
+        name=f"{problem.name} + mean progress",
+        preconditioner=lambda: problem.preconditioner)
+
+
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(prog="objective_variants")
     parser.add_argument("--truth", default="poolfire")
@@ -88,11 +129,13 @@ if __name__ == "__main__":
     parser.add_argument("--iterations", type=int, default=100)
     parser.add_argument("--model-error", type=int, default=0, metavar="N")
     parser.add_argument("--anchor", type=float, default=None, metavar="VOXELS")
+    parser.add_argument("--compact", type=float, default=None, metavar="MU")
     parser.add_argument("--start", type=Path, default=None, metavar="RUN")
     args = parser.parse_args()
     setup = method_problem(args.method, args.truth)
-    if args.anchor is not None and setup.cfg["regularizer"]["kind"] != "tikhonov":
-        parser.error("--anchor joins a Tikhonov term: give --method VG/Tikh.")
+    if (args.anchor, args.compact) != (None, None) and setup.cfg["regularizer"][
+            "kind"] != "tikhonov":
+        parser.error("--anchor and --compact join a Tikhonov term: give --method VG/Tikh.")
     measurement = setup.measurement
     if args.model_error:
         r2 = relative_model_error(setup, args.model_error)
@@ -113,6 +156,8 @@ if __name__ == "__main__":
         problem = setup.problem(lam, measurement, x0)
         if args.anchor is not None:
             problem = anchored(problem, setup.scene.grid.spacing, args.anchor)
+        if args.compact is not None:
+            problem = compact(problem, setup.scene.grid.spacing, args.compact)
         result = solvers.solve(problem, args.solver, max_iter=args.iterations,
                                **setup.cfg["solver"]["options"])
         scores = setup.scores(result.x)
