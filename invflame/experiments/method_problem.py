@@ -12,6 +12,8 @@ from invflame.experiments import config, reproduce, runner
 from invflame.experiments.metrics import field_scores
 from invflame.experiments.parameters import make_representation, starting_parameters
 from invflame.experiments.regularization import regularizer_weight
+from invflame.field import Field
+from invflame.geometry import VoxelGrid
 from invflame.measurement import Measurement
 from invflame.scene import Scene
 
@@ -58,10 +60,17 @@ class MethodProblem:
             x0=self.x0 if x0 is None else x0,
             sigma=measurement.sigma if reg["scaling"] == "chi2" else None)
 
-    def scores(self, theta) -> dict:
+    def scores(self, theta, cells=None) -> dict:
         """:func:`~invflame.experiments.metrics.field_scores` of parameters ``theta``
-        against the truth."""
-        return field_scores(self.truth, self.representation.fields(theta))
+        against the truth, on the reconstruction grid or, with ``cells`` (voxels per axis,
+        three ints), with both averaged onto that grid over the same box
+        (:meth:`invflame.field.Field.resample`)."""
+        truth, fields = self.truth, self.representation.fields(theta)
+        if cells is not None:
+            grid = self.scene.grid
+            coarse = VoxelGrid(grid.lower, grid.upper, tuple(cells), grid.up_axis)
+            truth, fields = (Field(grid, f).resample(coarse).values for f in (truth, fields))
+        return field_scores(truth, fields)
 
 
 def method_problem(method: str, truth: str = "poolfire", preset: str = "quick",
