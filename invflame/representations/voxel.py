@@ -214,8 +214,8 @@ def data_curvature(forward: op.Operator, x, probes: int = 2, seed: int = 0) -> n
     Returns
     -------
     ndarray, shape (n_fields,)
-        Positive; a field the data do not see gets the smallest positive float64 curvature
-        of the others (or 1 if none is seen).
+        Positive; a field the data do not see (curvature 0) gets the smallest curvature of
+        the fields they see (1 if they see none).
     """
     rng = np.random.default_rng(seed)
     dims = tuple(forward.dims)
