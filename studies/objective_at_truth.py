@@ -6,12 +6,14 @@ Usage: python studies/objective_at_truth.py RUN [RUN ...]
 For each run folder (of ``invflame run``, ``study`` or ``studies/lambda_sweep.py``, a voxel
 representation with a truth) it rebuilds the run's problem from its ``config.toml`` and its
 recorded data (``data.npz``: measured spectra and noise σ) and evaluates the objective
-χ² + λMΦ (the runner's weighting) at three points: the start (``initial.npz``), the truth
-averaged onto the grid (``truth.npz``, mapped to the run's parameters: for the state relation
-its progress and temperature factor by :meth:`StateRelation.invert`, clipped to the bounds,
-the factor of its ambient air, which no datum sees, filled smoothly from the gas around it;
-"truth" means the representable field nearest to it) and the reconstruction (the solver's
-last parameters, from the run's ``checkpoint.npz``). It prints χ²/M, Φ, the objective and
+χ² + λMΦ (the runner's weighting,
+:func:`~invflame.experiments.regularization.configured_problem`) at three points: the start
+(``initial.npz``), the truth averaged onto the grid (``truth.npz``, mapped to the run's
+parameters: for the state relation its progress and temperature factor by
+:meth:`StateRelation.invert`, clipped to the bounds, the factor of its ambient air, which no
+datum sees, filled smoothly from the gas around it; "truth" means the representable field
+nearest to it) and the reconstruction (the solver's last parameters, from the run's
+``checkpoint.npz``). It prints χ²/M, Φ, the objective and
 MSE_T of each point against the truth. A reconstruction whose objective lies far below the
 truth's fits what the grid cannot represent (the truth's χ²/M measures that model error): a
 solver that reaches the objective's minimum then moves away from the truth, whatever its
@@ -28,7 +30,9 @@ from invflame.atomic_files import read_json
 from invflame.experiments import config, runner
 from invflame.experiments.metrics import normalized_mse
 from invflame.experiments.parameters import make_representation
+from invflame.experiments.regularization import configured_problem
 from invflame.field import Field
+from invflame.measurement import Measurement
 
 
 def smooth_air_factor(theta: np.ndarray, sweeps: int = 500) -> np.ndarray:
@@ -57,11 +61,10 @@ def rows(folder: Path):
     if representation.kind != "voxel":
         raise SystemExit(f"{folder}: a {representation.kind} run; this study takes voxel runs")
     recorded = np.load(folder / "data.npz")
-    data, sigma = recorded["measured"], recorded["sigma"]
-    m = data.size
-    lam = solvers.problem_weight(summary["lambda"], m)
-    problem = representation.problem(data, regularizer=cfg["regularizer"]["kind"], lam=lam,
-                                     sigma=sigma)
+    measurement = Measurement(recorded["measured"], recorded["sigma"], summary["noisy_data"],
+                              {"source": str(folder / "data.npz")})
+    m = measurement.n_measurements
+    problem = configured_problem(cfg, scene, representation, measurement, summary["lambda"])
     truth = Field.load(folder / "truth.npz").values
     points = {"start": representation.initial_parameters(
                   Field.load(folder / "initial.npz").values),

@@ -11,7 +11,7 @@ import solvers
 from invflame.experiments import config, reproduce, runner
 from invflame.experiments.metrics import field_scores
 from invflame.experiments.parameters import make_representation, starting_parameters
-from invflame.experiments.regularization import regularizer_weight
+from invflame.experiments.regularization import configured_problem
 from invflame.field import Field
 from invflame.geometry import VoxelGrid
 from invflame.measurement import Measurement
@@ -51,14 +51,11 @@ class MethodProblem:
         """The run's problem with the configured λ (or ``lam``, on the configuration's
         scale), its measurement (or ``measurement``, e.g. with another σ) and start (or
         ``x0``)."""
-        measurement = self.measurement if measurement is None else measurement
-        reg = self.cfg["regularizer"]
-        weight = regularizer_weight(self.cfg, self.scene, measurement,
-                                    reg["lambda"] if lam is None else lam)
-        return self.representation.problem(
-            measurement.data, regularizer=reg["kind"], lam=weight,
-            x0=self.x0 if x0 is None else x0,
-            sigma=measurement.sigma if reg["scaling"] == "chi2" else None)
+        return configured_problem(
+            self.cfg, self.scene, self.representation,
+            self.measurement if measurement is None else measurement,
+            self.cfg["regularizer"]["lambda"] if lam is None else lam,
+            self.x0 if x0 is None else x0)
 
     def scores(self, theta, cells=None) -> dict:
         """:func:`~invflame.experiments.metrics.field_scores` of parameters ``theta``

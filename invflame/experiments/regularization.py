@@ -1,5 +1,6 @@
 """The regularizer's weight in a run: λ scaled as configured (``regularizer.scaling``, see
-:mod:`invflame.experiments.runner`) or chosen from the data by the discrepancy principle."""
+:mod:`invflame.experiments.runner`) or chosen from the data by the discrepancy principle, and
+the run's problem at a weight."""
 
 from __future__ import annotations
 
@@ -21,6 +22,32 @@ def regularizer_weight(cfg: dict, scene: Scene, measurement: Measurement, lam: f
     if cfg["regularizer"]["scaling"] == "paper":
         return lam * scene.n_rays
     return solvers.problem_weight(lam, measurement.n_measurements)
+
+
+def configured_problem(cfg: dict, scene: Scene, representation, measurement: Measurement,
+                       lam: float, x0=None) -> solvers.Problem:
+    """The run's inverse problem: ``representation``'s problem with the configured regularizer
+    at λ on the configuration's scale (:func:`regularizer_weight`), the misfit weighted by
+    the noise σ under ``"chi2"`` scaling, unweighted under ``"paper"``.
+
+    Parameters
+    ----------
+    cfg : dict
+        Validated configuration (``regularizer.kind``, ``regularizer.scaling``).
+    scene : Scene
+    representation : VoxelRepresentation, NeuralFieldRepresentation, ...
+    measurement : Measurement
+        Data and noise σ (W/(m²·sr·cm⁻¹)).
+    lam : float
+        λ, dimensionless on the configuration's scale.
+    x0 : ndarray, optional
+        Starting parameters.
+    """
+    reg = cfg["regularizer"]
+    return representation.problem(
+        measurement.data, regularizer=reg["kind"],
+        lam=regularizer_weight(cfg, scene, measurement, lam), x0=x0,
+        sigma=measurement.sigma if reg["scaling"] == "chi2" else None)
 
 
 def choose_lambda(cfg: dict, scene: Scene, representation, measurement: Measurement, x0,
@@ -68,9 +95,7 @@ def choose_lambda(cfg: dict, scene: Scene, representation, measurement: Measurem
     per_epoch = representation.iterations_per_epoch
 
     def solve_at(lam):
-        problem = representation.problem(measurement.data, regularizer=reg["kind"],
-                                         lam=solvers.problem_weight(lam, m), x0=x0,
-                                         sigma=measurement.sigma)
+        problem = configured_problem(cfg, scene, representation, measurement, lam, x0)
         result = solvers.solve(problem, solver["name"],
                                max_iter=solver["iterations"] * per_epoch, seed=cfg["seed"],
                                **solver["options"])

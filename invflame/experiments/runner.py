@@ -71,7 +71,11 @@ from invflame.experiments.parameters import (
     physical_fields,
     starting_parameters,
 )
-from invflame.experiments.regularization import choose_lambda, regularizer_weight
+from invflame.experiments.regularization import (
+    choose_lambda,
+    configured_problem,
+    regularizer_weight,
+)
 from invflame.experiments.resume import (
     FINGERPRINT,
     FORCE_HINT,
@@ -101,9 +105,10 @@ from invflame.spectroscopy.absorption_table import AbsorptionTable
 
 __all__ = ["CHECKPOINT_EVERY", "CHECKPOINT_SECONDS", "FINGERPRINT", "FORCE_HINT", "Log",
            "absorption_table", "build_scene", "check_fingerprint", "check_resumable",
-           "chi2_per_value", "choose_lambda", "initial_fields", "load_truth", "make_representation",
-           "measure", "physical_fields", "protocol", "read_data", "regularizer_weight",
-           "run_experiment", "run_fingerprint", "starting_parameters", "truth_scores"]
+           "chi2_per_value", "choose_lambda", "configured_problem", "initial_fields",
+           "load_truth", "make_representation", "measure", "physical_fields", "protocol",
+           "read_data", "regularizer_weight", "run_experiment", "run_fingerprint",
+           "starting_parameters", "truth_scores"]
 
 CHECKPOINT_EVERY = 10
 #: A checkpoint is written every :data:`CHECKPOINT_EVERY` iterations once this many seconds
@@ -320,10 +325,7 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
                                   "smallest misfit tried)"))
         log(f"regularizer weight: lambda {described['lambda']}")
         clock.lap("choice of lambda")
-    lam = regularizer_weight(cfg, scene, measurement, reg["lambda"])
-    sigma = measurement.sigma if reg["scaling"] == "chi2" else None
-    problem = representation.problem(measurement.data, regularizer=reg["kind"], lam=lam, x0=x0,
-                                     sigma=sigma)
+    problem = configured_problem(cfg, scene, representation, measurement, reg["lambda"], x0)
     per_epoch = representation.iterations_per_epoch
     callbacks = [solvers.Checkpoint(checkpoint, every=CHECKPOINT_EVERY,
                                     seconds=CHECKPOINT_SECONDS)]
@@ -368,7 +370,7 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
         "chi2_per_measurement": {"initial": chi2_per_value(scene.simulate(start), measurement),
                                  "final": chi2_per_value(simulated, measurement)},
         "noisy_data": measurement.noisy,
-        "noise_weighted_misfit": sigma is not None and measurement.noisy,
+        "noise_weighted_misfit": reg["scaling"] == "chi2" and measurement.noisy,
         **({} if truth is None else truth_scores(truth.values, fields, start)),
         "seconds_per_iteration": seconds,
         "seconds_per_epoch": None if seconds is None else seconds * per_epoch,
