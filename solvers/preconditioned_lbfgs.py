@@ -83,7 +83,7 @@ class PreconditionedLBFGS(Solver):
         x = np.asarray(run.x, np.float64)
         grad = np.asarray(current.grad, np.float64)
         free = (problem.projected_gradient(run.x, current.grad) == current.grad).astype(
-            np.float64)
+            np.float64).ravel()
         state = run.state
         for attempt in range(2):
             direction, scale = self._direction(problem, free, grad, state)
@@ -101,27 +101,29 @@ class PreconditionedLBFGS(Solver):
             if state["pairs"] == 0:
                 break
             state = {**state, "pairs": 0}  # a failed search clears the memory once
-        return Step(run.x, current, state, {"step": alpha, "backtracks": tries, "restarts": 1},
+        return Step(run.x, current, state,
+                    {"step": alpha, "backtracks": tries, "restarts": attempt},
                     stop=f"line search failed: no decrease after {o.max_backtracks} halvings "
                          "along the preconditioned gradient")
 
     def _direction(self, problem, free, grad, state) -> tuple[np.ndarray, float]:
-        """The search direction (``problem.dims``, float64) and its first trial step."""
+        """The search direction (``problem.dims``, float64) and its first trial step, for
+        ``free`` the flat 0/1 mask of the parameters free to move."""
         precondition = _preconditioner(problem if self.options.precondition else None)
         pairs = state["pairs"]
-        q = (free * grad).ravel()
+        q = free * grad.ravel()
         s, y = state["s"][:pairs], state["y"][:pairs]
         rho = 1.0 / np.einsum("ij,ij->i", s, y)
         alphas = np.empty(pairs)
         for i in range(pairs - 1, -1, -1):
             alphas[i] = rho[i] * (s[i] @ q)
             q -= alphas[i] * y[i]
-        r = (free.ravel() * precondition(free.ravel() * q))
+        r = free * precondition(free * q)
         if pairs:
             r *= (s[-1] @ y[-1]) / (y[-1] @ precondition(y[-1]))
         for i in range(pairs):
             r += s[i] * (alphas[i] - rho[i] * (y[i] @ r))
-        direction = -(free.ravel() * r).reshape(problem.dims)
+        direction = -(free * r).reshape(problem.dims)
         if pairs:
             return direction, 1.0
         largest = float(np.max(np.abs(direction)))

@@ -15,8 +15,8 @@ over the start, the hot-volume ratio, the iterations and why the solver stopped.
     error :math:`r(\nu)` per wavenumber, the root of
     :math:`\sum (F_\text{fine} - F)^2 / \sum F^2` over ``N`` prior plumes rendered as the
     data are and by the reconstruction model from their average on its grid
-    (:mod:`invflame.experiments.model_error`); :math:`d` the measured radiance (0 where
-    negative).
+    (:attr:`invflame.experiments.model_error.ModelError.relative_variance`); :math:`d` the
+    measured radiance (0 where negative).
 ``--anchor VOXELS``
     The Tikhonov term plus a pull to the start, :math:`\mathrm{mean}(\lVert Du\rVert^2 +
     \lVert u - u_0\rVert^2 / \ell^2)` with :math:`\ell` = VOXELS grid spacings.
@@ -40,31 +40,11 @@ import numpy as np
 import operators as op
 import solvers
 from invflame.experiments import reproduce
-from invflame.experiments.inputs import absorption_table
-from invflame.experiments.measurement import synthesis_scene
 from invflame.experiments.method_problem import method_problem
-from invflame.experiments.model_error import prior_flames
+from invflame.experiments.model_error import estimate_model_error
 from invflame.field import Field
-from invflame.geometry import VoxelGrid
 from invflame.representations.voxel import data_curvature
 from operators.functionals import namespace
-
-
-def relative_model_error(setup, n_flames: int) -> np.ndarray:
-    r""":math:`r(\nu)^2` from ``n_flames`` prior plumes (dimensionless, per wavenumber)."""
-    cfg, scene = setup.cfg, setup.scene
-    table = absorption_table(cfg, cfg["spectrum"]["step"] / cfg["data"]["step_divisor"])
-    grid = scene.grid
-    fine_grid = VoxelGrid(grid.lower, grid.upper, tuple(2 * n for n in grid.shape),
-                          grid.up_axis)
-    squared, signal = 0.0, 0.0
-    for _, flame in prior_flames(fine_grid, n_flames, cfg["seed"]):
-        fine = synthesis_scene(scene, flame, table, cfg["data"]["rays_per_pixel"])
-        model = scene.simulate(flame.resample(grid).values)
-        difference = fine.with_background(scene.background).simulate(flame.values) - model
-        squared = squared + np.sum(difference**2, axis=0)
-        signal = signal + np.sum(model**2, axis=0)
-    return squared / signal
 
 
 def anchored(problem: solvers.Problem, spacing, voxels: float) -> solvers.Problem:
@@ -147,7 +127,8 @@ if __name__ == "__main__":
         parser.error("--anchor and --compact join a Tikhonov term: give --method VG/Tikh.")
     measurement = setup.measurement
     if args.model_error:
-        r2 = relative_model_error(setup, args.model_error)
+        r2 = estimate_model_error(setup.cfg, setup.scene, measurement, args.model_error,
+                                  seed=setup.cfg["seed"]).relative_variance
         print(f"relative model error r: median {np.sqrt(np.median(r2)):.4f}, range "
               f"{np.sqrt(r2.min()):.4f}-{np.sqrt(r2.max()):.4f}")
         sigma = np.sqrt(np.broadcast_to(measurement.sigma, measurement.data.shape) ** 2

@@ -56,10 +56,15 @@ class ModelError:
         (dimensionless).
     flames : list of dict
         Each flame's parameters (:data:`PRIOR_RANGES`, and its seed).
+    relative_variance : ndarray, shape (n_out,)
+        :math:`r(\nu)^2 = \sum (F_\text{fine}(f) - F(\bar f))^2 / \sum F(\bar f)^2` per
+        output wavenumber, the sums over the prior flames and pixels (dimensionless): the
+        model error as a fraction of the radiance (not in :meth:`as_dict`).
     """
 
     chi2_per_value: np.ndarray
     flames: list
+    relative_variance: np.ndarray
 
     @property
     def level(self) -> float:
@@ -133,6 +138,7 @@ def estimate_model_error(cfg: dict, scene: Scene, measurement: Measurement,
                              measurement.data.shape)
     counted = np.isfinite(weight) & (weight > 0)
     values, described = [], []
+    squared = signal = 0.0
     if flames is None:
         grid = scene.grid
         fine_grid = VoxelGrid(grid.lower, grid.upper, tuple(2 * n for n in grid.shape),
@@ -144,11 +150,13 @@ def estimate_model_error(cfg: dict, scene: Scene, measurement: Measurement,
                              f"takes {scene.field_shape[0]} (give prior flames with soot to a "
                              "scene that reconstructs soot)")
         fine = synthesis_scene(scene, flame, table, cfg["data"]["rays_per_pixel"])
-        difference = (fine.with_background(scene.background).simulate(flame.values)
-                      - scene.simulate(flame.resample(scene.grid).values))
+        model = scene.simulate(flame.resample(scene.grid).values)
+        difference = fine.with_background(scene.background).simulate(flame.values) - model
         values.append(float(np.mean(np.square(difference * weight)[counted])))
+        squared = squared + np.sum(np.square(difference), axis=0)
+        signal = signal + np.sum(np.square(model), axis=0)
         described.append(drawn)
         if log is not None:
             log(f"model error of prior flame {len(values)}/{len(flames)} {drawn}: chi2/M "
                 f"{values[-1]:.4g}")
-    return ModelError(np.array(values), described)
+    return ModelError(np.array(values), described, squared / signal)
