@@ -43,7 +43,7 @@ from invflame.experiments import reproduce
 from invflame.experiments.method_problem import method_problem
 from invflame.experiments.model_error import estimate_model_error
 from invflame.field import Field
-from invflame.representations.voxel import data_curvature
+from invflame.representations.curvature import by_field, group_curvature
 from operators.functionals import namespace
 
 
@@ -65,7 +65,7 @@ def anchored(problem: solvers.Problem, spacing, voxels: float) -> solvers.Proble
         name=f"{problem.name} + pull to the start",
         preconditioner=lambda: op.ScreenedPoissonSolve(
             dims, tuple(spacing), scale,
-            data_curvature(problem.forward, problem.x0) + scale * pull**2))
+            group_curvature(problem.forward, problem.x0, by_field(dims)) + scale * pull**2))
 
 
 class SquaresThenSum(op.Functional):

@@ -165,6 +165,10 @@ SCHEMA: dict[str, Key | Section] = {
         "hidden": _positive(INTEGER, 64, "networks: units per hidden layer"),
         "depth": _positive(INTEGER, 4, "networks: number of hidden layers (formerly 'layers', "
                            "still read with a warning)"),
+        "grid_levels": Key(INTEGER, 0, "networks: levels of a learned multi-resolution "
+                           "feature grid joining the positional encoding (two features per "
+                           "node and level, the finest at the voxels' resolution, each coarser "
+                           "one halved); 0: none, the paper's network", low=0.0),
         "coarse_samples": _positive(INTEGER, 32, "'neural-field': stratified samples per "
                                     "sub-ray"),
         "fine_samples": _positive(INTEGER, 32, "'neural-field': importance samples per sub-ray, "

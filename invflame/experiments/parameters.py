@@ -62,7 +62,8 @@ def make_representation(cfg: dict, scene: Scene):
     relation = (state_relation(cfg, scene) if settings["parameters"] == "state-relation"
                 else None)
     network = {"n_frequencies": settings["frequencies"], "hidden": settings["hidden"],
-               "depth": settings["depth"], "seed": cfg["seed"], "state_relation": relation}
+               "depth": settings["depth"], "grid_levels": settings["grid_levels"],
+               "seed": cfg["seed"], "state_relation": relation}
     if kind != "voxel":
         device = torch.device(torch_device(settings["device"]))
         if device != torch.get_default_device():

@@ -8,6 +8,7 @@ import numpy as np
 import operators as op
 import solvers
 from invflame.geometry import VoxelGrid
+from invflame.representations.curvature import by_field, group_curvature, quadratic_weight
 from invflame.representations.normalization import (
     SOOT_MAX,
     SOOT_SCALE,
@@ -164,25 +165,18 @@ class VoxelRepresentation(Representation):
     def _preconditioner(self, forward, regularizer, lam: float, x0):
         r"""For ``preconditioned-lbfgs``: :math:`(c_f I + a D^\mathsf{T} D)^{-1}`
         (:class:`operators.ScreenedPoissonSolve`), with :math:`c_f` the misfit's mean
-        curvature per parameter of field :math:`f` at ``x0`` (:func:`data_curvature`) and
-        :math:`a D^\mathsf{T} D` the regularizer's: :math:`a = \lambda s` for Tikhonov
-        :math:`\lambda s \|Du\|^2`; for TV :math:`\lambda s \sum |Du|`, :math:`a = \lambda s
-        / (2\tau)` with :math:`\tau` the median of the nonzero :math:`|Du|` at ``x0`` (the
-        curvature of the quadratic that touches :math:`|t|` at :math:`|t| = \tau`). None
-        (the identity) without a regularizer or a start. Costs two Jacobian-vector products
-        of the forward map per field, so the problem builds it only when a solver asks."""
+        curvature per parameter of field :math:`f` at ``x0``
+        (:func:`~invflame.representations.curvature.group_curvature`) and :math:`a
+        D^\mathsf{T} D` the regularizer's (:func:`~invflame.representations.curvature.
+        quadratic_weight`: :math:`a = \lambda s` for Tikhonov, :math:`\lambda s / (2\tau)`
+        for TV). None (the identity) without a regularizer or a start. Costs two
+        Jacobian-vector products of the forward map per field, so the problem builds it only
+        when a solver asks."""
         if regularizer is None or lam == 0 or x0 is None:
             return None
-        functional = regularizer.functional
-        weight = lam * functional.scale
-        if isinstance(functional, op.L1):
-            differences = np.abs(np.asarray(regularizer.op.matvec(np.ravel(x0)), np.float64))
-            moving = differences[differences > 0]
-            typical = max(float(np.median(moving)) if moving.size else 1.0,
-                          functional.smoothing)
-            weight /= 2.0 * typical
-        return op.ScreenedPoissonSolve(self.dims, tuple(self.grid.spacing), weight,
-                                       data_curvature(forward, x0))
+        return op.ScreenedPoissonSolve(self.dims, tuple(self.grid.spacing),
+                                       quadratic_weight(regularizer, lam, x0),
+                                       group_curvature(forward, x0, by_field(self.dims)))
 
     def fields(self, theta) -> np.ndarray:
         """Physical fields ``(4, nx, ny, nz)`` (T in K, mole fractions; with soot a fifth,
@@ -191,43 +185,6 @@ class VoxelRepresentation(Representation):
         if self.state_relation is None:
             return denormalize(theta)
         return _relation_fields(self.state_relation, theta.astype(np.float64), np)
-
-
-def data_curvature(forward: op.Operator, x, probes: int = 2, seed: int = 0) -> np.ndarray:
-    r"""The mean curvature of the misfit :math:`\|F(\theta) - d\|^2` per parameter of each
-    field, :math:`\mathrm{tr}(J_f^\mathsf{T} J_f) / N_f` with :math:`J_f` the Jacobian of
-    ``forward`` at ``x`` restricted to field ``f`` (half the Gauss–Newton Hessian's diagonal,
-    averaged), by Hutchinson's estimator with ``probes`` Rademacher vectors per field.
-
-    Parameters
-    ----------
-    forward : operators.Operator
-        From parameters ``(n_fields, nx, ny, nz)`` to data (whitened: then per unit of the
-        parameters squared).
-    x : ndarray
-        The point, ``forward.dims``.
-    probes : int, optional
-        Jacobian-vector products per field (default 2).
-    seed : int, optional
-        Of the probes.
-
-    Returns
-    -------
-    ndarray, shape (n_fields,)
-        Positive; a field the data do not see (curvature 0) gets the smallest curvature of
-        the fields they see (1 if they see none).
-    """
-    rng = np.random.default_rng(seed)
-    dims = tuple(forward.dims)
-    curvature = np.zeros(dims[0])
-    for field in range(dims[0]):
-        for _ in range(probes):
-            v = np.zeros(dims, forward.dtype)
-            v[field] = rng.choice(np.array([-1.0, 1.0], forward.dtype), dims[1:])
-            jv = np.asarray(forward.jvp(x, v), np.float64)
-            curvature[field] += float(jv.ravel() @ jv.ravel()) / (probes * np.prod(dims[1:]))
-    seen = curvature > 0
-    return np.where(seen, curvature, curvature[seen].min() if seen.any() else 1.0)
 
 
 def _relation_fields(relation: StateRelation, theta, xp):

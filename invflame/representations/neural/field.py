@@ -250,8 +250,8 @@ class NeuralFieldRepresentation(Representation):
         (default 1024).
     batch_centres : int, optional
         Voxel centres per iteration for the regularizer estimate (default 4096).
-    n_frequencies, hidden, depth : int, optional
-        Network shape, see :class:`FieldNetwork` (defaults 10, 64, 4).
+    n_frequencies, hidden, depth, grid_levels : int, optional
+        Network shape, see :class:`FieldNetwork` (defaults 10, 64, 4, 0).
     seed : int, optional
         Seed of the weight initialization (coarse ``seed``, fine ``seed + 1``) and of the
         pixel order of every epoch.
@@ -270,7 +270,8 @@ class NeuralFieldRepresentation(Representation):
     def __init__(self, scene, n_coarse: int = 64, n_fine: int = 64, batch_rays: int = 1024,
                  batch_centres: int = 4096, n_frequencies: int = 10, hidden: int = 64,
                  depth: int = 4, seed: int = 0, opacity: PlanckMeanOpacity | None = None,
-                 chunk_rays: int | None = None, state_relation: StateRelation | None = None):
+                 chunk_rays: int | None = None, state_relation: StateRelation | None = None,
+                 grid_levels: int = 0):
         if batch_centres < 1:
             raise ValueError(f"batch_centres must be >= 1; got {batch_centres}")
         self.scene = scene
@@ -278,7 +279,7 @@ class NeuralFieldRepresentation(Representation):
         self.seed = int(seed)
         self.renderer = NeuralRenderer(scene, n_coarse, n_fine, batch_rays, opacity, chunk_rays)
         network = partial(FieldNetwork.for_scene, scene, n_frequencies, hidden, depth,
-                          state_relation=state_relation)
+                          state_relation=state_relation, grid_levels=grid_levels)
         self.coarse, self.fine = network(seed=seed), network(seed=seed + 1)
         self.n_parameters = self.coarse.n_parameters + self.fine.n_parameters
         self.centres = centre_points(scene.grid, self.renderer.dtype)

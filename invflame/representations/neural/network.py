@@ -10,11 +10,12 @@ Following the NeRF-like representation of Tricard, Chen & Deng (2026),
 
     \gamma(p) = \big(p,\ \sin(2^k \pi p),\ \cos(2^k \pi p)\big)_{k = 0}^{L-1},
 
-with :math:`L = 10` frequencies (a 63-dimensional encoding), 4 hidden layers of 64 units with
-ReLU, and output activations that keep the fields in range: :math:`T = T_\min + (T_\max -
-T_\min)\,\mathrm{sigmoid}(z_0)` (the absorption table's range, 250–2500 K by default) and
-:math:`X_s = \mathrm{sigmoid}(z_s)`. The last layer's biases start at the values giving
-:math:`T = 300` K and :math:`X_s = 0.02`, so an untrained network is close to ambient air.
+with :math:`L = 10` frequencies (a 63-dimensional encoding; with ``grid_levels`` a learned
+multi-resolution feature grid joins it, :mod:`~invflame.representations.neural.feature_grid`),
+4 hidden layers of 64 units with ReLU, and output activations that keep the fields in range:
+:math:`T = T_\min + (T_\max - T_\min)\,\mathrm{sigmoid}(z_0)` (the absorption table's range,
+250–2500 K by default) and :math:`X_s = \mathrm{sigmoid}(z_s)`. The last layer's biases start
+at the values giving :math:`T = 300` K and :math:`X_s = 0.02` (close to ambient air).
 
 With a state relation (:mod:`invflame.representations.state_relation`) the network has two
 outputs instead, the progress :math:`s = s_\max\,\mathrm{sigmoid}(z_0)` and the temperature
@@ -37,6 +38,7 @@ import numpy as np
 import torch
 
 from invflame.geometry import VoxelGrid
+from invflame.representations.neural.feature_grid import FeatureGrid, interpolate
 from invflame.representations.normalization import SCALES
 from invflame.representations.state_relation import StateRelation
 from operators.interop import TORCH_DTYPES
@@ -72,6 +74,11 @@ class FieldNetwork(torch.nn.Module):
         Its box (m) maps to :math:`[-1, 1]^3` before the encoding.
     n_frequencies : int, optional
         Frequencies :math:`L` of the sinusoidal encoding (default 10).
+    grid_levels : int, optional
+        Levels of a learned feature grid whose features join the encoding
+        (:class:`~invflame.representations.neural.feature_grid.FeatureGrid`, two features per
+        node and level, the finest level at the grid's resolution); 0 (default): none, the
+        paper's network.
     hidden : int, optional
         Units per hidden layer (default 64).
     depth : int, optional
@@ -91,21 +98,25 @@ class FieldNetwork(torch.nn.Module):
 
     def __init__(self, grid: VoxelGrid, n_frequencies: int = 10, hidden: int = 64,
                  depth: int = 4, temperature_range=(250.0, 2500.0), seed: int = 0,
-                 dtype=torch.float32, state_relation: StateRelation | None = None):
+                 dtype=torch.float32, state_relation: StateRelation | None = None,
+                 grid_levels: int = 0):
         super().__init__()
         t_min, t_max = (float(t) for t in temperature_range)
         if not 0 < t_min < AMBIENT_START[0] < t_max:
             raise ValueError(f"temperature_range must satisfy 0 < T_min < {AMBIENT_START[0]} K"
                              f" < T_max; got {temperature_range}")
-        if n_frequencies < 0 or hidden < 1 or depth < 1:
-            raise ValueError(f"need n_frequencies >= 0, hidden >= 1, depth >= 1; got "
-                             f"{n_frequencies}, {hidden}, {depth}")
+        if n_frequencies < 0 or hidden < 1 or depth < 1 or grid_levels < 0:
+            raise ValueError(f"need n_frequencies >= 0, hidden >= 1, depth >= 1, grid_levels "
+                             f">= 0; got {n_frequencies}, {hidden}, {depth}, {grid_levels}")
         self.grid = grid
         self.n_frequencies = int(n_frequencies)
         self.temperature_range = (t_min, t_max)
         self.state_relation = state_relation
-        widths = [3 * (1 + 2 * self.n_frequencies)] + [int(hidden)] * int(depth)
         generator = torch.Generator().manual_seed(int(seed))
+        self.features = (FeatureGrid(grid.shape, grid_levels, generator, dtype)
+                         if grid_levels else None)
+        n_features = 0 if self.features is None else self.features.n_outputs
+        widths = [3 * (1 + 2 * self.n_frequencies) + n_features] + [int(hidden)] * int(depth)
         layers = []
         for n_in, n_out in zip(widths[:-1], widths[1:], strict=True):
             layers += [_linear(n_in, n_out, generator, dtype), torch.nn.ReLU()]
@@ -129,12 +140,14 @@ class FieldNetwork(torch.nn.Module):
 
     @classmethod
     def for_scene(cls, scene, n_frequencies: int = 10, hidden: int = 64, depth: int = 4,
-                  seed: int = 0, state_relation: StateRelation | None = None) -> FieldNetwork:
+                  seed: int = 0, state_relation: StateRelation | None = None,
+                  grid_levels: int = 0) -> FieldNetwork:
         """A network on a scene's grid, with its absorption table's temperature range (K) and
         its dtype (float32 or float64); the other parameters as for :class:`FieldNetwork`."""
         return cls(scene.grid, n_frequencies, hidden, depth,
                    tuple(scene.table.temperatures[[0, -1]]), seed=seed,
-                   dtype=TORCH_DTYPES[np.dtype(scene.dtype)], state_relation=state_relation)
+                   dtype=TORCH_DTYPES[np.dtype(scene.dtype)], state_relation=state_relation,
+                   grid_levels=grid_levels)
 
     # -- the map ------------------------------------------------------------------------------
     def unit(self, points: torch.Tensor) -> torch.Tensor:
@@ -142,10 +155,14 @@ class FieldNetwork(torch.nn.Module):
         return 2.0 * (points - self.lower) / self.extent - 1.0
 
     def encode(self, points: torch.Tensor) -> torch.Tensor:
-        r""":math:`\gamma(p)` of points ``(..., 3)`` in m: shape ``(..., 3 (1 + 2 L))``."""
+        r""":math:`\gamma(p)` of points ``(N, 3)`` in m, then the feature grid's encoding if
+        the network has one: shape ``(N, 3 (1 + 2 L) + levels × features)``."""
         p = self.unit(points)
         angles = (p[..., None, :] * self.frequencies[:, None]).flatten(-2)
-        return torch.cat([p, torch.sin(angles), torch.cos(angles)], dim=-1)
+        parts = [p, torch.sin(angles), torch.cos(angles)]
+        if self.features is not None:
+            parts.append(self.features(p))
+        return torch.cat(parts, dim=-1)
 
     def forward(self, points: torch.Tensor) -> torch.Tensor:
         """Physical fields at points ``(..., 3)`` in m: shape ``(4, ...)``, T in K.
@@ -233,11 +250,7 @@ class FieldNetwork(torch.nn.Module):
 
     def _offset_at(self, points: torch.Tensor) -> torch.Tensor:
         """The offset buffer at points ``(N, 3)`` in m, trilinear: shape ``(N, n_outputs)``."""
-        # grid_sample's last coordinate indexes the input's first spatial axis
-        grid = self.unit(points).flip(-1).reshape(1, -1, 1, 1, 3)
-        values = torch.nn.functional.grid_sample(self.offset, grid, mode="bilinear",
-                                                 padding_mode="border", align_corners=False)
-        return values.reshape(self.offset.shape[1], -1).T
+        return interpolate(self.offset, self.unit(points))
 
     def normalized(self, points: torch.Tensor) -> torch.Tensor:
         """Normalized fields :math:`u = f / s` at points ``(..., 3)``: shape ``(4, ...)``."""
@@ -316,8 +329,6 @@ def _linear(n_in: int, n_out: int, generator: torch.Generator, dtype) -> torch.n
 def centre_points(grid: VoxelGrid, dtype=torch.float32) -> torch.Tensor:
     """Voxel centres of ``grid`` in m as a tensor ``(nx, ny, nz, 3)``."""
     return torch.as_tensor(grid.centres(), dtype=dtype)
-
-
 
 
 def pretrain(network: FieldNetwork, target, iterations: int = 2000, lr: float = 1e-3,

@@ -199,6 +199,11 @@ def test_resume_refuses_another_configuration(tmp_path):
 def test_honest_rows_keep_the_tuned_lambda_on_the_state_relation_and_paper_rows_the_papers():
     for method, (kind, regularizer) in reproduce.METHODS.items():
         cfg = reproduce.method_config("quick", method, protocol="honest")
+        if kind != "voxel":  # the honest networks, at the voxel centres with a feature grid
+            kind = reproduce.HONEST_NETWORK["kind"]
+            assert cfg["representation"]["grid_levels"] == reproduce.HONEST_NETWORK["grid_levels"]
+        assert cfg["representation"]["kind"] == kind
+        assert cfg["solver"]["name"] == reproduce.HONEST_SOLVERS[kind]["name"]
         assert cfg["regularizer"]["lambda"] == reproduce.HONEST_LAMBDA[kind][regularizer], method
         assert cfg["regularizer"]["scaling"] == "chi2"
         assert cfg["representation"]["parameters"] == "state-relation"

@@ -74,3 +74,39 @@ def test_noise_weighted_objective_divides_the_residuals_by_sigma(centres32):
     expected = np.sum(residual**2) + 0.5 * rep.regularizer("tv")(theta)
     assert problem.objective(theta) == pytest.approx(expected, rel=1e-5)
     assert rep.iterations_per_epoch == 1
+
+
+@pytest.fixture(scope="module")
+def grid_network(tiny_scene, plume):
+    rep = NeuralCentresRepresentation(tiny_scene, n_frequencies=2, hidden=16, depth=2, seed=0,
+                                      grid_levels=2)
+    theta = rep.initial_parameters(plume, iterations=40, lr=3e-3, progress=False)
+    return rep, theta, tiny_scene.simulate(plume)
+
+
+def test_a_feature_grid_network_is_rendered_and_taylor_tested(grid_network):
+    rep, theta, _ = grid_network
+    assert rep.n_parameters > sum(level.numel() for level in rep.network.features.levels)
+    result = operators.taylor_test(rep.forward, theta, h0=1e-3, seed=0)
+    assert result.passed, str(result)
+
+
+def test_the_preconditioner_is_the_inverse_curvature_of_each_weight_tensor(grid_network):
+    rep, theta, data = grid_network
+    problem = rep.problem(data, "tikhonov", lam=1.0, x0=theta)
+    assert callable(problem._preconditioner)  # built when a solver asks
+    diagonal = problem.preconditioner.diagonal.ravel()
+    sizes = [p.numel() for p in rep.network.parameters()]
+    per_tensor = np.split(diagonal, np.cumsum(sizes)[:-1])
+    assert all(np.all(d == d[0]) and d[0] > 0 for d in per_tensor)
+    assert len({float(d[0]) for d in per_tensor}) == len(sizes)  # tensors differ
+    unweighted = rep.problem(data, "tikhonov", lam=0.0, x0=theta).preconditioner.diagonal
+    assert np.all(diagonal <= unweighted.ravel())  # the regularizer adds curvature
+    assert rep.problem(data, "none").preconditioner is None
+
+
+def test_preconditioned_lbfgs_lowers_the_feature_grid_networks_objective(grid_network):
+    rep, theta, data = grid_network
+    problem = rep.problem(data, "tikhonov", lam=1.0, x0=theta)
+    result = solvers.solve(problem, "preconditioned-lbfgs", max_iter=5)
+    assert problem.objective(result.x) < 0.5 * problem.objective(theta)

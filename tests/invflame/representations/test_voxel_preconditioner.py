@@ -5,23 +5,8 @@ import numpy as np
 import pytest
 
 import operators as op
-from invflame.representations.voxel import VoxelRepresentation, data_curvature
-
-
-def test_data_curvature_is_the_mean_squared_jacobian_column_per_field():
-    """For a diagonal map the Rademacher probes are exact: sum of d² per field over its size."""
-    weights = np.random.default_rng(0).uniform(0.5, 2.0, (2, 3, 4, 5))
-    forward = op.Diagonal(weights)
-    expected = (weights.reshape(2, -1) ** 2).mean(axis=1)
-    np.testing.assert_allclose(data_curvature(forward, np.zeros(weights.shape)), expected,
-                               rtol=1e-12)
-
-
-def test_a_field_the_data_do_not_see_gets_the_smallest_seen_curvature():
-    weights = np.ones((2, 3, 3, 3))
-    weights[1] = 0.0
-    np.testing.assert_allclose(data_curvature(op.Diagonal(weights), np.zeros(weights.shape)),
-                               [1.0, 1.0])
+from invflame.representations.curvature import by_field, group_curvature
+from invflame.representations.voxel import VoxelRepresentation
 
 
 @pytest.mark.parametrize("regularizer", ["tikhonov", "tv"])
@@ -40,5 +25,6 @@ def test_the_preconditioner_matches_the_regularizer(tiny_scene64, plume, regular
         du = np.abs(op.Gradient(rep.dims, tuple(rep.grid.spacing)).matvec(x0.ravel()))
         tau = np.median(du[du > 0])
         assert preconditioner.weight == pytest.approx(scale / (2 * tau), rel=1e-6)
-    np.testing.assert_allclose(preconditioner.shift, data_curvature(problem.forward, x0))
+    np.testing.assert_allclose(preconditioner.shift,
+                               group_curvature(problem.forward, x0, by_field(rep.dims)))
     assert rep.problem(data, "none", x0=x0).preconditioner is None
