@@ -19,9 +19,11 @@ import numpy as np
 import operators as op
 
 
-def quadratic_weight(regularizer: op.Composite, lam: float, x0) -> float:
+def quadratic_weight(regularizer, lam: float, x0) -> float:
     r"""The weight :math:`a` of :math:`a\|R\theta\|^2`, the quadratic model of
-    :math:`\lambda\,g(R\theta)` at ``x0``.
+    :math:`\lambda\,g(R\theta)` at ``x0``, for a regularizer with an outer ``functional``
+    :math:`g` and an inner ``op`` :math:`R` (an :class:`operators.Composite` or a
+    :class:`solvers.Regularizer`, whose ``op`` may be nonlinear).
 
     :math:`a = \lambda s` for the squared L2 norm :math:`s\|\cdot\|^2`; for the L1 norm
     :math:`s\sum|\cdot|`, :math:`a = \lambda s / (2\tau)` with :math:`\tau` the median of the

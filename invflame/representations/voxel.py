@@ -167,11 +167,11 @@ class VoxelRepresentation(Representation):
         (:class:`operators.ScreenedPoissonSolve`), with :math:`c_f` the misfit's mean
         curvature per parameter of field :math:`f` at ``x0``
         (:func:`~invflame.representations.curvature.group_curvature`) and :math:`a
-        D^\mathsf{T} D` the regularizer's (:func:`~invflame.representations.curvature.
-        quadratic_weight`: :math:`a = \lambda s` for Tikhonov, :math:`\lambda s / (2\tau)`
-        for TV). None (the identity) without a regularizer or a start. Costs two
-        Jacobian-vector products of the forward map per field, so the problem builds it only
-        when a solver asks."""
+        D^\mathsf{T} D` the regularizer's
+        (:func:`~invflame.representations.curvature.quadratic_weight`: :math:`a = \lambda s`
+        for Tikhonov, :math:`\lambda s / (2\tau)` for TV). None (the identity) without a
+        regularizer or a start. Costs two Jacobian-vector products of the forward map per
+        field, so the problem builds it only when a solver asks."""
         if regularizer is None or lam == 0 or x0 is None:
             return None
         return op.ScreenedPoissonSolve(self.dims, tuple(self.grid.spacing),
