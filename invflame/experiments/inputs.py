@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from invflame.errors import InputDataError
+from invflame.errors import ConfigError, InputDataError
 from invflame.experiments.config_scene import line_by_line_grid, reconstruction_grid, rig_spec
 from invflame.field import Field
 from invflame.geometry import CameraRig, VoxelGrid, paper_rig
@@ -54,6 +54,58 @@ def read_data(cfg: dict) -> MeasurementFile | None:
     spec = rig_spec(cfg)
     where = f"the rig file {cfg['rig']['file']}" if cfg["rig"]["file"] else "rig.cameras"
     return read_measurement(source, rig=None if spec is None else spec.rig, rig_source=where)
+
+
+def widened_window(cfg: dict, measured: MeasurementFile | None) -> tuple[dict, str]:
+    """The configuration with its line-by-line window widened for a measurement file.
+
+    A measured channel is the lineshape-weighted mean of the spectrum around it
+    (:mod:`operators.ils`); the model knows the spectrum inside ``spectrum.min``..
+    ``spectrum.max`` only and renormalizes the lineshape cut there. So that every channel
+    has ``instrument.margin`` resolutions of its lineshape modelled on each side, the window
+    is widened on its own step (``spectrum.step``), never narrowed.
+
+    Parameters
+    ----------
+    cfg : dict
+        Validated configuration.
+    measured : MeasurementFile or None
+        The run's measured data (:func:`read_data`); None (simulated data, whose output grid
+        follows the window) changes nothing.
+
+    Returns
+    -------
+    cfg : dict
+        ``cfg`` itself when nothing changed, else a copy with the new ``[spectrum]``.
+    note : str
+        One line on the widening for the run's log; empty when nothing changed.
+
+    Raises
+    ------
+    ConfigError
+        If the widened window would reach down to 0 cm⁻¹ or below.
+    """
+    if measured is None:
+        return cfg, ""
+    spectrum = cfg["spectrum"]
+    reach = cfg["instrument"]["margin"] * measured.resolution
+    step, low, high = spectrum["step"], spectrum["min"], spectrum["max"]
+    below = max(0.0, low - (float(measured.wavenumber.min()) - reach))
+    above = max(0.0, float(measured.wavenumber.max()) + reach - high)
+    if below == above == 0.0:
+        return cfg, ""
+    widened = {"min": low - step * np.ceil(below / step - 1e-9),
+               "max": high + step * np.ceil(above / step - 1e-9)}
+    if widened["min"] <= 0.0:
+        raise ConfigError(f"the measured channels from {measured.wavenumber.min():g} cm-1 would "
+                          f"need the window to reach {widened['min']:g} cm-1: lower "
+                          "'instrument.margin'")
+    note = (f"the line-by-line window {low:g}-{high:g} cm-1 widened to {widened['min']:g}-"
+            f"{widened['max']:g} cm-1: the measured channels "
+            f"{measured.wavenumber.min():g}-{measured.wavenumber.max():g} cm-1 at "
+            f"{measured.resolution:g} cm-1 resolution need their lineshape "
+            f"{cfg['instrument']['margin']:g} resolutions beyond them ('instrument.margin')")
+    return {**cfg, "spectrum": {**spectrum, **widened}}, note
 
 
 def scene_rig(cfg: dict, measured: MeasurementFile | None = None) -> CameraRig:

@@ -5,14 +5,13 @@ r"""One reconstruction from a configuration: scene, data, representation, solver
 ====================== ======================================================================
 ``config.toml``        the complete configuration (defaults filled in) with its seed; with
                        ``data.source``, a comment on top gives the measurement file's
-                       instrument, which the run uses in place of ``[instrument]``
+                       instrument, which the run uses in place of ``[instrument]``, and
+                       ``[spectrum]`` the window widened for its channels (``widened_window``)
 ``summary.json``       metrics (normalized MSE and PSNR per field, time per iteration, memory),
                        the wall time of each stage (``stages``, s: inputs, tables and scene;
-                       data; start; choice of λ; solve; outputs) and the machine that
-                       computed them (:func:`~invflame.experiments.machine.describe_machine`);
-                       with
-                       ``data.source``, ``measured_instrument``: the file's resolution,
-                       apodization and wavenumbers, used in place of ``[instrument]``
+                       data; start; choice of λ; solve; outputs), the machine that computed
+                       them (:func:`~invflame.experiments.machine.describe_machine`); with
+                       ``data.source``, ``measured_instrument`` (the file's instrument)
 ``history.csv``        per-iteration loss, data misfit, regularizer, gradient norm, wall time
 ``truth.npz``          ground truth on the reconstruction grid (:class:`invflame.field.Field`)
 ``initial.npz``        starting fields (for a neural field: the pretrained network's)
@@ -62,7 +61,13 @@ import solvers
 from invflame.atomic_files import read_json, write_csv, write_json, write_npz, write_text
 from invflame.background_file import background_from_config
 from invflame.experiments import config as configuration
-from invflame.experiments.inputs import absorption_table, load_truth, read_data, scene_rig
+from invflame.experiments.inputs import (
+    absorption_table,
+    load_truth,
+    read_data,
+    scene_rig,
+    widened_window,
+)
 from invflame.experiments.machine import describe_machine, in_words
 from invflame.experiments.measurement import simulate_measurement, synthesis_scene
 from invflame.experiments.metrics import peak_memory_mb
@@ -108,7 +113,7 @@ __all__ = ["CHECKPOINT_EVERY", "CHECKPOINT_SECONDS", "FINGERPRINT", "FORCE_HINT"
            "chi2_per_value", "choose_lambda", "configured_problem", "initial_fields",
            "load_truth", "make_representation", "measure", "physical_fields", "protocol",
            "read_data", "regularizer_weight", "run_experiment", "run_fingerprint",
-           "starting_parameters", "truth_scores"]
+           "starting_parameters", "truth_scores", "widened_window"]
 
 CHECKPOINT_EVERY = 10
 #: A checkpoint is written every :data:`CHECKPOINT_EVERY` iterations once this many seconds
@@ -158,7 +163,8 @@ def build_scene(cfg: dict, table: AbsorptionTable | None = None,
                               f"'spectrum.max' = {table.wavenumber[0]:g}-"
                               f"{table.wavenumber[-1]:g} cm-1: widen the window")
     if spec is not None:
-        check_instrument(spec, resolution, (table.wavenumber[0], table.wavenumber[-1]),
+        check_instrument(spec, resolution,
+                         None if measured else (table.wavenumber[0], table.wavenumber[-1]),
                          "the measurement" if measured else "[instrument] and [spectrum]")
     return Scene(grid, rig, table, resolution=resolution, out_wavenumber=out_wavenumber,
                  rays_per_pixel=cfg["rig"]["rays_per_pixel"],
@@ -262,9 +268,10 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
     solver = cfg["solver"]
     summary_path, checkpoint = out / SUMMARY, out / CHECKPOINT
     clock = StageClock()
-    changed = check_resumable(cfg, out, force) if resume else []
     measured, native = read_data(cfg), load_truth(cfg)  # the files first: quick to refuse
-    scene = build_scene(cfg, table, measured, progress)
+    cfg, widened = widened_window(cfg, measured)
+    changed = check_resumable(cfg, out, force) if resume else []
+    scene = build_scene(cfg, None if widened else table, measured, progress)
     truth = None if native is None else _on_grid(cfg, native, scene.grid)
     if resume and summary_path.is_file():
         # finished: simulated data follow from the configuration, truth and code checked here
@@ -278,6 +285,8 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
                       out / FINGERPRINT):
             stale.unlink(missing_ok=True)
     log = Log(out / "log.txt", echo=progress)
+    if widened:
+        log(widened)
     source = cfg["data"]["source"]
     write_text(out / "config.toml", configuration.dumps(cfg) if measured is None
                else measured.instrument_comment(source) + configuration.dumps(cfg))
@@ -311,8 +320,7 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
         (out / "truth.npz").unlink(missing_ok=True)
     else:
         truth.save(out / "truth.npz")
-    Field(scene.grid, start, {"source": "initial", "init": cfg["init"]}).save(
-        out / "initial.npz")
+    Field(scene.grid, start, {"source": "initial", "init": cfg["init"]}).save(out / "initial.npz")
     reg = dict(cfg["regularizer"])
     choice_file = out / "lambda_choice.json"
     if isinstance(reg["lambda"], str):  # a rule: chosen from the data, once
@@ -349,9 +357,8 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
     write_npz(out / "data.npz", measured=measurement.data, simulated=simulated,
               sigma=measurement.sigma, out_wavenumber=scene.out_wavenumber)
     history = result.history.as_dict()
-    write_csv(out / "history.csv",
-              [dict(zip(history, row, strict=True)) for row in zip(*history.values(),
-                                                                   strict=True)])
+    write_csv(out / "history.csv", [dict(zip(history, row, strict=True))
+                                    for row in zip(*history.values(), strict=True)])
     times = np.asarray(history["time"])
     seconds = float(np.diff(times).mean()) if times.size > 1 else None
     summary = {

@@ -328,8 +328,9 @@ def check_instrument(spec: RigSpec, resolution: float, window, where: str) -> No
         The rig and its stated settings.
     resolution : float
         The modelled resolution in cm⁻¹.
-    window : (float, float)
-        The modelled line-by-line window in cm⁻¹.
+    window : (float, float) or None
+        The modelled line-by-line window in cm⁻¹; None: not checked (measured data, whose
+        channels set the window).
     where : str
         What configures the model, for the message.
     """
@@ -337,7 +338,7 @@ def check_instrument(spec: RigSpec, resolution: float, window, where: str) -> No
     if "resolution" in stated and not np.isclose(stated["resolution"], resolution):
         raise InputDataError(f"the rig's cameras have resolution {stated['resolution']:g} cm-1 "
                              f"but {where} models {resolution:g} cm-1; make them agree")
-    if "window" in stated and not np.allclose(stated["window"], window):
+    if window is not None and "window" in stated and not np.allclose(stated["window"], window):
         low, high = stated["window"]
         raise InputDataError(f"the rig's cameras have the window {low:g}-{high:g} cm-1 but "
                              f"{where} models {window[0]:g}-{window[1]:g} cm-1; make them agree")

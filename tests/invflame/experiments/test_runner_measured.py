@@ -1,6 +1,7 @@
 """Runs from a measurement file and a rig file: no truth needed, the same numbers as in memory."""
 
 import json
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -71,6 +72,8 @@ source = "m.nc"
 min = {SPECTRUM['min']}
 max = {SPECTRUM['max']}
 step = {SPECTRUM['step']}
+[instrument]
+margin = 0  # the file's data were simulated on this window: model it alike
 """)
     blind = config.load(measured_cfg)
     assert blind["truth"]["source"] == "none"
@@ -114,6 +117,32 @@ iterations = 2
 """)
     assert main(["run", str(cfg), "--out", str(tmp_path / "out"), "--quiet"]) == 0
     assert "(no ground truth)" in capsys.readouterr().out
+    # the channels 668-682 cm-1 at 8 cm-1 need 4 resolutions of lineshape beyond them
+    assert ("the line-by-line window 660-690 cm-1 widened to 636-714 cm-1"
+            in (tmp_path / "out" / "log.txt").read_text())
+    used = config.load(tmp_path / "out" / "config.toml")["spectrum"]
+    assert (used["min"], used["max"]) == pytest.approx((636.0, 714.0))
+
+
+@pytest.mark.parametrize(("margin", "window"), [(0.0, (660.0, 690.0)), (1.0, (660.0, 690.0)),
+                                                (1.5, (656.0, 694.0)), (2.04, (651.6, 698.4))])
+def test_the_window_widens_on_its_step_to_the_margin_the_channels_need(simulated, monkeypatch,
+                                                                       margin, window):
+    monkeypatch.chdir(simulated[0])
+    cfg = config.validate({"truth": {"grid": 8}, "data": {"source": "m.nc"},
+                           "spectrum": SPECTRUM, "instrument": {"margin": margin}})
+    widened, note = runner.widened_window(cfg, runner.read_data(cfg))
+    assert (widened["spectrum"]["min"], widened["spectrum"]["max"]) == pytest.approx(window)
+    assert (widened is cfg) == (note == "") == (window == (660.0, 690.0))
+    assert cfg["spectrum"]["min"] == SPECTRUM["min"]  # the caller's configuration unchanged
+
+
+def test_a_window_widened_below_zero_wavenumber_is_refused():
+    cfg = config.validate({"truth": {"grid": 8}, "spectrum": SPECTRUM})
+    channels = SimpleNamespace(wavenumber=np.array([20.0, 680.0]), resolution=8.0)
+    with pytest.raises(ConfigError, match="from 20 cm-1 would need the window to reach -12 "
+                                          "cm-1: lower 'instrument.margin'"):
+        runner.widened_window(cfg, channels)
 
 
 @pytest.mark.parametrize(("settings", "message"), [
@@ -197,6 +226,21 @@ def test_a_rig_stating_another_resolution_is_refused(simulated, monkeypatch):
     with pytest.raises(InputDataError, match="resolution 4 cm-1 but \\[instrument\\] and "
                                              "\\[spectrum\\] models 8 cm-1"):
         runner.build_scene(cfg)
+
+
+def test_a_rig_window_must_be_the_simulated_one_and_measured_channels_set_it(simulated,
+                                                                          monkeypatch):
+    folder, _, _ = simulated
+    monkeypatch.chdir(folder)
+    write_rig(paper_rig(VoxelGrid.poolfire(8), n_pixels=4), folder / "rig_window.toml",
+              {"window": [668.0, 682.0]})
+    base = {"truth": {"grid": 8}, "spectrum": SPECTRUM, "rig": {"file": "rig_window.toml"}}
+    with pytest.raises(InputDataError, match="the window 668-682 cm-1 but \\[instrument\\] "
+                                             "and \\[spectrum\\] models 660-690 cm-1"):
+        runner.build_scene(config.validate(base))
+    cfg = config.validate({**base, "data": {"source": "m.nc"}})
+    scene = runner.build_scene(cfg, measured=runner.read_data(cfg))
+    assert (scene.out_wavenumber.min(), scene.out_wavenumber.max()) == (668.0, 682.0)
 
 
 def test_a_file_without_noise_is_reported_as_an_unweighted_misfit(simulated, tmp_path,
