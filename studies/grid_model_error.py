@@ -13,6 +13,9 @@ model's prediction of
 - the averaged field copied onto the fine grid (the same field: a check, equal to the first);
 - the averaged field interpolated trilinearly onto the fine grid between voxel centres.
 
+and the radiance that prediction sums to over every pixel and wavenumber against the data's
+(below 1: the field emits less than the flame that made the data).
+
 χ²/M near 1 would mean the model fits the truth to the noise. A large first value that the
 second removes says the grid, not the rays, makes the model error; if interpolation does
 not lower it, what the coarse grid misses is structure inside its voxels (emission is
@@ -55,8 +58,8 @@ if __name__ == "__main__":
     interpolated = np.stack([map_coordinates(f, centres, order=1, mode="nearest")
                              for f in coarse])
     print(f"{args.method} on {args.truth}: χ²/M of the data against the model of")
-    print("| field | model grid | χ²/M |")
-    print("|---|---|---:|")
+    print("| field | model grid | χ²/M | radiance / data's |")
+    print("|---|---|---:|---:|")
     for label, grid, scene, field in (
             ("the truth averaged onto the grid", cells, setup.scene, coarse),
             ("the truth averaged onto the fine grid", fine.grid.shape, fine,
@@ -64,5 +67,6 @@ if __name__ == "__main__":
             ("the averaged truth copied onto the fine grid", fine.grid.shape, fine, copied),
             ("the averaged truth interpolated trilinearly", fine.grid.shape, fine,
              interpolated)):
-        print(f"| {label} | {'×'.join(map(str, grid))} | {chi2(scene.simulate(field)):.4g} |",
-              flush=True)
+        prediction = scene.simulate(field)
+        print(f"| {label} | {'×'.join(map(str, grid))} | {chi2(prediction):.4g} | "
+              f"{prediction.sum() / measurement.data.sum():.4f} |", flush=True)
