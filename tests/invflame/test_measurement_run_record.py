@@ -37,7 +37,9 @@ def test_the_run_records_the_resolution_and_wavenumbers_of_the_file(tmp_path):
     assert text.startswith(f"# [instrument] is not used: the measurement file data.source = "
                            f"{str(source)!r} sets the instrument:\n# resolution = 4 cm-1, "
                            "apodization = 'triangular', 19 wavenumbers 666-684 cm-1\n")
-    assert config.load(tmp_path / "run" / "config.toml") == cfg  # the comment changes no value
+    # the comment changes no value; the window is widened 4 resolutions beyond 666-684 cm-1
+    widened = {**cfg, "spectrum": {**cfg["spectrum"], "min": 650.0, "max": 700.0}}
+    assert config.load(tmp_path / "run" / "config.toml") == widened
     again = runner.run_experiment(cfg, tmp_path / "run", resume=True, progress=False)
     assert again["measured_instrument"] == used
 
