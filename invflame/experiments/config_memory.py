@@ -29,6 +29,7 @@ import os
 from collections.abc import Iterator
 from dataclasses import dataclass
 
+from invflame.errors import ConfigError
 from invflame.experiments.config_scene import grid_cells
 
 GIB = 2.0**30
@@ -70,7 +71,7 @@ def machine_memory() -> int | None:
 
 def _points(low: float, high: float, step: float) -> float:
     """Points from ``low`` to ``high`` every ``step`` (none for an empty range)."""
-    return max(0.0, math.floor((high - low) / step) + 1.0)
+    return max(0.0, math.floor((high - low) / step + 1e-9) + 1.0)
 
 
 def _table_columns(broadening: str) -> tuple[int, int]:
@@ -120,18 +121,25 @@ def estimates(cfg: dict, loaded: dict) -> list[Estimate]:
     loaded : dict
         What the file checks read (:mod:`invflame.experiments.config_files`): ``"rig"``, the
         configured cameras (None: the paper's rig), and where there are, ``"truth"`` (a field
-        file's :class:`~invflame.field.Field`) and ``"measured"`` (the measurement file).
+        file's :class:`~invflame.field.Field`) and ``"measured"`` (the measurement file,
+        whose channels widen the line-by-line window as the run does:
+        :func:`invflame.experiments.inputs.widened_window`).
 
     Returns
     -------
     list of Estimate
     """
+    from invflame.experiments.inputs import widened_window
     from invflame.geometry import VoxelGrid
 
+    measured, spec = loaded.get("measured"), loaded.get("rig")
+    try:  # the window the run models for a measurement file's channels
+        cfg = widened_window(cfg, measured)[0]
+    except ConfigError:  # a window past 0 cm-1: the run refuses it with its own message
+        pass
     spectrum, instrument, data, rig = cfg["spectrum"], cfg["instrument"], cfg["data"], cfg["rig"]
     cells = grid_cells(cfg)
     grid_key = "grid.cells" if cfg["grid"]["cells"] else "truth.grid"
-    measured, spec = loaded.get("measured"), loaded.get("rig")
     cameras = spec.rig if spec else measured.rig if measured else None
     pixels = float(cameras.n_rays if cameras else 4 * rig["pixels"] ** 2)
     camera_keys = (("rig.file" if rig["file"] else "rig.cameras",) if spec else

@@ -8,7 +8,7 @@ import pytest
 
 from invflame.cli import main
 from invflame.errors import ConfigError, InputDataError
-from invflame.experiments import config, runner
+from invflame.experiments import config, config_memory, runner
 from invflame.geometry import VoxelGrid, paper_rig
 from invflame.geometry.rig_file import rig_records, write_rig
 from invflame.measurement import Measurement
@@ -77,7 +77,7 @@ margin = 0  # the file's data were simulated on this window: model it alike
 """)
     blind = config.load(measured_cfg)
     assert blind["truth"]["source"] == "none"
-    blind["solver"] = dict(SOLVER)
+    blind["solver"] = {**blind["solver"], **SOLVER}
     summary = runner.run_experiment(blind, tmp_path / "blind", progress=False)
     assert "mse" not in summary and summary["chi2_per_measurement"]["final"] > 0
     assert not (tmp_path / "blind" / "truth.npz").exists()
@@ -135,6 +135,19 @@ def test_the_window_widens_on_its_step_to_the_margin_the_channels_need(simulated
     assert (widened["spectrum"]["min"], widened["spectrum"]["max"]) == pytest.approx(window)
     assert (widened is cfg) == (note == "") == (window == (660.0, 690.0))
     assert cfg["spectrum"]["min"] == SPECTRUM["min"]  # the caller's configuration unchanged
+
+
+def test_the_memory_check_counts_the_window_widened_for_the_channels(simulated, monkeypatch):
+    monkeypatch.chdir(simulated[0])
+    tables = {}
+    for margin in (0.0, 2.04):
+        cfg = config.validate({"truth": {"grid": 8}, "data": {"source": "m.nc"},
+                               "spectrum": SPECTRUM, "instrument": {"margin": margin}})
+        found = config_memory.estimates(cfg, {"measured": runner.read_data(cfg), "rig": None})
+        [tables[margin]] = [e for e in found
+                            if e.what == "the absorption table of the reconstruction"]
+    assert "x 301 points x" in tables[0.0].shape and "x 469 points x" in tables[2.04].shape
+    assert tables[2.04].nbytes == pytest.approx(tables[0.0].nbytes * 469 / 301)
 
 
 def test_a_window_widened_below_zero_wavenumber_is_refused():
