@@ -140,7 +140,7 @@ class Solver:
 
     Parameters
     ----------
-    max_iter, rtol_loss, rtol_x, gtol, time_budget, loss_window
+    max_iter, rtol_loss, rtol_x, gtol, time_budget, loss_window, misfit_target
         Stopping rules, see :class:`solvers.stopping.StoppingRule`.
     **options
         Algorithm options, the fields of the solver's ``Options`` dataclass.
@@ -165,10 +165,11 @@ class Solver:
 
     def __init__(self, *, max_iter: int = 100, rtol_loss: float | None = None,
                  rtol_x: float | None = None, gtol: float | None = None,
-                 time_budget: float | None = None, loss_window: int = 1, **options):
+                 time_budget: float | None = None, loss_window: int = 1,
+                 misfit_target: float | None = None, **options):
         self.options = self.Options.from_kwargs(options)
         self.stopping = StoppingRule(max_iter, rtol_loss, rtol_x, gtol, time_budget,
-                                     loss_window)
+                                     loss_window, misfit_target)
 
     def __repr__(self) -> str:
         opts = ", ".join(f"{k}={v!r}" for k, v in self.options.items())
@@ -302,7 +303,8 @@ class Solver:
                 return "callback: a callback asked to stop"
         if step.stop:
             return step.stop
-        return (self.stopping.converged(run.history["loss"], step_ratio, grad_norm)
+        return (self.stopping.converged(run.history["loss"], step_ratio, grad_norm,
+                                        run.current.misfit)
                 or self.stopping.budget_spent(run.iteration, run.call_seconds))
 
     def _started(self, problem, x0, seed, callbacks) -> RunState:

@@ -58,7 +58,8 @@ class History:
         return f"<History: {len(self)} rows, columns {', '.join(self.keys())}>"
 
 
-CONVERGED = ("gtol:", "rtol_loss:", "rtol_x:", "converged:", "scipy L-BFGS-B: CONVERGENCE",
+CONVERGED = ("gtol:", "rtol_loss:", "rtol_x:", "misfit_target:", "converged:",
+             "scipy L-BFGS-B: CONVERGENCE",
              "scipy L-BFGS-B: STOP: PROJECTED GRADIENT IS SUFFICIENTLY SMALL")
 """Beginnings of the stop reasons of a converged run: the stopping rules' tests
 (:mod:`solvers.stopping`), a solver's own test, SciPy L-BFGS-B's convergence messages."""

@@ -27,7 +27,8 @@ from dataclasses import MISSING, dataclass, field, fields
 from numbers import Integral, Real
 from types import NoneType, UnionType
 
-STOPPING_RULES = ("max_iter", "rtol_loss", "rtol_x", "gtol", "time_budget", "loss_window")
+STOPPING_RULES = ("max_iter", "rtol_loss", "rtol_x", "gtol", "time_budget", "loss_window",
+                  "misfit_target")
 """Options every solver takes beside its own (see :class:`solvers.stopping.StoppingRule`)."""
 
 

@@ -59,6 +59,12 @@ class StoppingRule:
     loss_window : int, optional
         Iterations :math:`w` over which ``rtol_loss`` measures the change (default 1). First-order
         methods take many small steps: a window (e.g. 20) tells a plateau from a slow step.
+    misfit_target : float, optional
+        Stop when the misfit :math:`\|W(F(\theta) - d)\|^2` (loss units) is at most this
+        value: the discrepancy principle as a stopping rule, which makes the iteration count
+        the regularizer (Engl, Hanke & Neubauer, *Regularization of Inverse Problems*,
+        Kluwer 1996). With the noise-weighted misfit :math:`\chi^2`, ``tau * M`` stops at
+        :math:`\chi^2/M \le \tau`.
     """
 
     max_iter: int = 100
@@ -67,13 +73,14 @@ class StoppingRule:
     gtol: float | None = None
     time_budget: float | None = None
     loss_window: int = 1
+    misfit_target: float | None = None
 
     def __post_init__(self):
         if int(self.max_iter) != self.max_iter or self.max_iter < 0:
             raise ValueError(f"max_iter must be a non-negative integer, got {self.max_iter}")
         if int(self.loss_window) != self.loss_window or self.loss_window < 1:
             raise ValueError(f"loss_window must be a positive integer, got {self.loss_window}")
-        for name in ("rtol_loss", "rtol_x", "gtol", "time_budget"):
+        for name in ("rtol_loss", "rtol_x", "gtol", "time_budget", "misfit_target"):
             _check_tolerance(name, getattr(self, name))
 
     def as_dict(self) -> dict:
@@ -88,7 +95,8 @@ class StoppingRule:
             return f"time_budget: {call_seconds:.3g} s >= {self.time_budget:g} s"
         return None
 
-    def converged(self, losses, step_ratio: float, grad_norm: float) -> str | None:
+    def converged(self, losses, step_ratio: float, grad_norm: float,
+                  misfit: float = float("nan")) -> str | None:
         """Reason to stop after an iteration, or None.
 
         Parameters
@@ -100,7 +108,12 @@ class StoppingRule:
             Relative change of the parameters in this iteration.
         grad_norm : float
             Norm of the projected gradient at the new iterate.
+        misfit : float, optional
+            The misfit term at the new iterate (NaN, the default, when unknown: a stochastic
+            objective's).
         """
+        if self.misfit_target is not None and misfit <= self.misfit_target:
+            return f"misfit_target: misfit {misfit:.6g} <= {self.misfit_target:g}"
         if self.gtol is not None and grad_norm <= self.gtol:
             return f"gtol: gradient norm {grad_norm:.3e} <= {self.gtol:g}"
         w = self.loss_window

@@ -93,6 +93,10 @@ def _check_regularizer(raw: dict, full: dict, loaded: dict) -> Iterator[str]:
         yield ("'regularizer.lambda' = 'discrepancy' needs 'regularizer.scaling' = 'chi2' (the "
                "rule compares the noise-weighted misfit with the number of measurements): set "
                "scaling = \"chi2\" or give lambda a number")
+    if full["solver"]["stop_chi2"] > 0 and reg["scaling"] != "chi2":
+        yield (f"'solver.stop_chi2' = {full['solver']['stop_chi2']!r} stops at a noise-weighted "
+               "misfit χ²/M, but 'regularizer.scaling' = 'paper' weights none: set scaling = "
+               "\"chi2\" or stop_chi2 = 0")
     if reg["tv_smoothing"] == 0:
         return
     if reg["kind"] != "tv":

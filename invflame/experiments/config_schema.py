@@ -224,6 +224,10 @@ SCHEMA: dict[str, Key | Section] = {
                        "the solver's own options and stopping rules (lr, rtol_loss, "
                        "loss_window, rtol_x, gtol, time_budget, ...), see solvers.solve; a "
                        "table given replaces this one whole"),
+        "stop_chi2": Key(NUMBER, 0.0, "stop at the first iterate whose χ²/M is at most this "
+                         "level: the discrepancy principle as a stopping rule, which makes the "
+                         "iteration count a regularizer (0: off; needs regularizer.scaling = "
+                         "'chi2' and data with a noise σ)", low=0.0),
     }),
     "init": Section("the start", {
         "kind": Key(STRING, "band-tomography", "'band-tomography': from the data (band-"

@@ -50,6 +50,27 @@ def configured_problem(cfg: dict, scene: Scene, representation, measurement: Mea
         sigma=measurement.sigma if reg["scaling"] == "chi2" else None)
 
 
+def solver_options(cfg: dict, measurement: Measurement) -> dict:
+    """The configured solver's options and stopping rules, with ``solver.stop_chi2`` as the
+    misfit it stops at (:class:`solvers.stopping.StoppingRule`: χ² ≤ level·M).
+
+    Raises
+    ------
+    ConfigError
+        If ``solver.stop_chi2`` is set and the data carry no noise σ (noise-free synthetic
+        data, or a measurement file without noise).
+    """
+    options, level = dict(cfg["solver"]["options"]), cfg["solver"]["stop_chi2"]
+    if level > 0:
+        if not measurement.noisy:
+            raise ConfigError(f"'solver.stop_chi2' = {level!r} stops at a noise-weighted misfit "
+                              "χ²/M, and these data have no noise σ (noise.kind = 'none', or a "
+                              "measurement file without noise): set stop_chi2 = 0, or give the "
+                              "data their noise")
+        options["misfit_target"] = level * measurement.n_measurements
+    return options
+
+
 def choose_lambda(cfg: dict, scene: Scene, representation, measurement: Measurement, x0,
                   out: Path, log) -> solvers.ParameterChoice:
     """λ by Morozov's discrepancy principle (:func:`solvers.discrepancy_principle`).
@@ -98,7 +119,7 @@ def choose_lambda(cfg: dict, scene: Scene, representation, measurement: Measurem
         problem = configured_problem(cfg, scene, representation, measurement, lam, x0)
         result = solvers.solve(problem, solver["name"],
                                max_iter=solver["iterations"] * per_epoch, seed=cfg["seed"],
-                               **solver["options"])
+                               **solver_options(cfg, measurement))
         final = problem.evaluate(result.x)
         log(f"lambda {lam:.4g}: chi2/M {final.misfit / m:.4g}, Phi {final.regularizer:.4g} "
             f"after {result.iterations} iterations ({result.stop_reason})")

@@ -80,6 +80,7 @@ from invflame.experiments.regularization import (
     choose_lambda,
     configured_problem,
     regularizer_weight,
+    solver_options,
 )
 from invflame.experiments.resume import (
     FINGERPRINT,
@@ -346,7 +347,7 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
         + (f", resuming from {checkpoint.name}" if resume_from else ""))
     result = solvers.solve(problem, solver["name"], max_iter=solver["iterations"] * per_epoch,
                            callbacks=callbacks, seed=cfg["seed"], resume=resume_from,
-                           **solver["options"])
+                           **solver_options(cfg, measurement))
     clock.lap("solve")
     log(str(result))
 
@@ -359,8 +360,7 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
     history = result.history.as_dict()
     write_csv(out / "history.csv", [dict(zip(history, row, strict=True))
                                     for row in zip(*history.values(), strict=True)])
-    times = np.asarray(history["time"])
-    seconds = float(np.diff(times).mean()) if times.size > 1 else None
+    seconds = float(np.diff(history["time"]).mean()) if len(history["time"]) > 1 else None
     summary = {
         "config": cfg,
         "measured_instrument": None if measured is None else measured.instrument(source),

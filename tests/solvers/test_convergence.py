@@ -73,3 +73,13 @@ def test_a_float64_run_leaves_jax_64_bit_mode_as_it_found_it(nonlinear_problem, 
         solvers.solve(nonlinear_problem, name, **{**NONLINEAR[name], "max_iter": 1})
         assert jax.config.jax_enable_x64
     assert not jax.config.jax_enable_x64
+
+
+@pytest.mark.parametrize("name", solvers.available())
+def test_solver_stops_at_the_first_iterate_within_the_misfit_target(nonlinear_problem, name):
+    start = nonlinear_problem.evaluate(nonlinear_problem.x0).misfit
+    target = 0.05 * start
+    result = solvers.solve(nonlinear_problem, name, misfit_target=target, **NONLINEAR[name])
+    misfit = np.asarray(result.history["misfit"])
+    assert result.stop_reason.startswith("misfit_target:") and result.converged, result
+    assert misfit[-1] <= target and np.all(misfit[:-1] > target), misfit

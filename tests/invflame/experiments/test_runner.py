@@ -214,15 +214,26 @@ def test_honest_rows_keep_the_tuned_lambda_on_the_state_relation_and_paper_rows_
 
 
 def test_table_marks_the_lambdas_chosen_from_the_data():
-    row = {"method": "VG/TV", "iterations": 5, "converged": True, "chi2_per_measurement": 2.0,
+    row = {"method": "VG/TV", "iterations": 5, "converged": True, "stopped_by": "plateau",
+           "chi2_per_measurement": 2.0,
            "MSE_T": 0.01, "MSE_T_flame": 0.1, "MSE_CO2": 0.01, "MSE_H2O": 0.01,
            "hot_volume_ratio": 1.0, "MSE_T_initial": 0.02, "improvement_T": 2.0,
            "epoch_ms": 10.0, "paper_MSE_T": 0.0121, "machine": "not recorded"}
     rows = [dict(row, **{"lambda": 1.0e4, "lambda_from_data": True}),
         dict(row, method="NN/TV", **{"lambda": 30.0, "lambda_from_data": False})]
     text = comparison_table.markdown_table(rows, [], "quick", "honest", "poolfire", {})
-    assert "| VG/TV | 1e+04* |" in text and "| NN/TV | 30 |" in text
+    assert "| VG/TV | 1e+04* | 5 | plateau |" in text and "| NN/TV | 30 |" in text
     assert text.startswith("Preset `quick`, protocol `honest`, truth `poolfire`.")
+
+
+def test_table_names_the_rule_that_stopped_each_run():
+    assert comparison_table.stopped_by("misfit_target: misfit 3 <= 4") == "χ²/M level"
+    assert comparison_table.stopped_by("rtol_loss: relative loss change <= 0.001") == "plateau"
+    assert comparison_table.stopped_by("max_iter: reached 100 iterations") == "limit"
+    assert comparison_table.stopped_by("scipy L-BFGS-B: CONVERGENCE: REL_REDUCTION_OF_F") \
+        == "SciPy's test"
+    assert comparison_table.stopped_by("callback: a callback asked to stop") == "callback"
+    assert comparison_table.stopped_by(None) == "not recorded"
 
 
 def test_table_names_the_machines_of_its_epoch_times():
@@ -282,3 +293,20 @@ def test_a_configuration_naming_only_the_truth_is_the_honest_studys_voxel_tikhon
         study[sizes] = {**study[sizes], **{k: given[sizes][k] for k in ("pixels", "step")
                                           if k in given[sizes]}}
     assert given == study
+
+
+def test_stop_chi2_ends_the_solve_at_the_first_iterate_within_the_level(tmp_path):
+    free = runner.run_experiment(tiny(), tmp_path / "free", progress=False)
+    chi2 = np.loadtxt(tmp_path / "free" / "history.csv", delimiter=",", skiprows=1,
+                      usecols=2) / np.load(tmp_path / "free" / "data.npz")["measured"].size
+    assert free["iterations"] == 6 and chi2[3] < chi2[:3].min(), chi2
+    level = 0.5 * (chi2[3] + chi2[:3].min())  # iteration 3 is the first at or below it
+    summary = runner.run_experiment(tiny(solver={**TINY["solver"], "stop_chi2": level}),
+                                    tmp_path / "stopped", progress=False)
+    assert summary["iterations"] == 3 and summary["converged"]
+    assert summary["stop_reason"].startswith("misfit_target:")
+    with pytest.raises(config.ConfigError, match="'solver.stop_chi2' = 2.0 stops at a noise-"):
+        tiny(solver={**TINY["solver"], "stop_chi2": 2.0}, regularizer={"scaling": "paper"})
+    with pytest.raises(config.ConfigError, match="these data have no noise σ"):
+        runner.run_experiment(tiny(solver={**TINY["solver"], "stop_chi2": 2.0},
+                                   noise={"kind": "none"}), tmp_path / "free", progress=False)
