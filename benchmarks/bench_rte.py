@@ -104,8 +104,10 @@ def stages(scene: Scene, fields, repeats: int, clock: str) -> dict:
         interval, temperature, fractions, length)
     batches = (index, amount, offset, temp)
     radiance = emission_radiance(tables, segment_fields, lengths, batch_rays)
-    cotangent = jnp.ones_like(radiance)
-    zeros = jnp.zeros((batch_rays, tables.n_eta), tables.dtype)
+    # the sweeps run on the spectral points, of which a bin may hold several (the values do
+    # not change the time)
+    points = jnp.ones((lengths.shape[0], tables.n_points), tables.dtype)
+    zeros = jnp.zeros((batch_rays, tables.n_points), tables.dtype)
 
     def spectra(k, b):
         return sweeps_xla._spectra(tables, b[0][k], b[1][k], b[2][k], b[3][k])
@@ -131,8 +133,7 @@ def stages(scene: Scene, fields, repeats: int, clock: str) -> dict:
     sweep = jax.jit(lambda n, b: jax.lax.map(
         lambda a: sweeps_xla._sweep(tables, *a[1], a[0], None), (n, b)))
     times["forward sweep"] = best_time(lambda: sweep(n_segments, batches), repeats, clock)
-    spectra_in = (spectra_batches(radiance, order, batch_rays),
-                  spectra_batches(cotangent, order, batch_rays))
+    spectra_in = (spectra_batches(points, order, batch_rays),) * 2
     reverse = jax.jit(lambda n, b, s: jax.lax.map(
         lambda a: sweeps_xla._sweep_vjp(tables, *a[1], a[0], *a[2]), (n, b, s)))
     times["reverse sweep"] = best_time(lambda: reverse(n_segments, batches, spectra_in),
@@ -140,9 +141,9 @@ def stages(scene: Scene, fields, repeats: int, clock: str) -> dict:
     index, weights = sweeps_numba._numba_weights(tables, segment_fields)
     amount, offset = weights(segment_fields, lengths)
     shapes = (jax.ShapeDtypeStruct((*amount.shape[:-1], amount.shape[-1] + 1), tables.dtype),
-              jax.ShapeDtypeStruct((0, tables.n_eta), tables.dtype))
+              jax.ShapeDtypeStruct((0, tables.n_points), tables.dtype))
     numba_reverse = jax.jit(lambda t, *a: sweeps_numba._numba_sweep("reverse", shapes, t, *a))
-    numba_inputs = (tables, index, amount, offset, lengths, radiance, cotangent)
+    numba_inputs = (tables, index, amount, offset, lengths, points, points)
     times["reverse sweep, Numba"] = best_time(lambda: numba_reverse(*numba_inputs), repeats,
                                               clock)
 
