@@ -120,7 +120,7 @@ class GaussNewton(Solver):
             )
 
     def init_state(self, run):
-        return {"damping": float(self.options["damping"]), "nu": 2.0}
+        return {"damping": float(self.options.damping), "nu": 2.0}
 
     def step(self, run) -> Step:
         o = self.options
@@ -133,9 +133,9 @@ class GaussNewton(Solver):
             free = problem.projected_gradient(x0, grad) == grad
         op, residual = stacked_jacobian(problem, current, free)
         mu, nu = run.state["damping"], run.state["nu"]
-        for retry in range(int(o["max_retries"])):
-            sol = lsqr(op, -residual.ravel(), damp=np.sqrt(mu), atol=o["inner_tol"],
-                       btol=o["inner_tol"], iter_lim=int(o["inner_iter"]))
+        for retry in range(o.max_retries):
+            sol = lsqr(op, -residual.ravel(), damp=np.sqrt(mu), atol=o.inner_tol,
+                       btol=o.inner_tol, iter_lim=o.inner_iter)
             step = sol[0].reshape(problem.dims)
             if free is not None:
                 step = free * step

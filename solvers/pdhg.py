@@ -134,9 +134,9 @@ class PDHG(Solver):
         jk = current.regularizer_jacobian if use_reg else None
         norm = run.state["norm"]
         if not (self._linear(problem) and np.isfinite(norm)):
-            norm = 1.05 * operators.operator_norm(stack, int(o["norm_iter"]), seed=run.rng())
-        tau = o["tau"] or 0.99 / max(norm, np.finfo(float).tiny)
-        sigma = o["sigma"] or 0.99 / max(norm, np.finfo(float).tiny)
+            norm = 1.05 * operators.operator_norm(stack, o.norm_iter, seed=run.rng())
+        tau = o.tau or 0.99 / max(norm, np.finfo(float).tiny)
+        sigma = o.sigma or 0.99 / max(norm, np.finfo(float).tiny)
 
         x0 = run.x
         b = problem.data - jf.value                    # data model: J (x - x0) - b
@@ -145,7 +145,7 @@ class PDHG(Solver):
         p, q = run.state["p"], run.state.get("q")
         blocks = stack.combination
         x = x0
-        for _ in range(int(o["inner_iter"])):
+        for _ in range(o.inner_iter):
             y = blocks.join([p, q] if use_reg else [p])
             x_new = problem.project(x - tau * stack.adjoint(y))
             x_bar = 2.0 * x_new - x
@@ -165,7 +165,7 @@ class PDHG(Solver):
         trial = run.evaluate(target)
         alpha = 1.0
         if not self._linear(problem):
-            for _ in range(int(o["max_backtracks"])):
+            for _ in range(o.max_backtracks):
                 if trial.loss <= current.loss:
                     break
                 alpha /= 2
