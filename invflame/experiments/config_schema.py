@@ -218,7 +218,7 @@ SCHEMA: dict[str, Key | Section] = {
     "solver": Section("the optimizer and its stopping rules", {
         "name": Key(STRING, "lbfgs", "a solver's name from solvers.available() (gd, adam, "
                     "gauss-newton, pdhg, lbfgs, ...)"),
-        "iterations": _positive(INTEGER, 100, "the most iterations; stopping rules in options "
+        "iterations": _positive(INTEGER, 400, "the most iterations; stopping rules in options "
                                 "may end sooner"),
         "options": Key(TABLE, {"rtol_loss": 1e-3, "loss_window": 10},
                        "the solver's own options and stopping rules (lr, rtol_loss, "

@@ -205,6 +205,7 @@ def test_honest_rows_keep_the_tuned_lambda_on_the_state_relation_and_paper_rows_
         assert cfg["representation"]["kind"] == kind
         assert cfg["solver"]["name"] == reproduce.HONEST_SOLVERS[kind]["name"]
         assert cfg["regularizer"]["lambda"] == reproduce.HONEST_LAMBDA[kind][regularizer], method
+        assert cfg["solver"]["iterations"] == reproduce.PRESETS["quick"]["honest_epochs"][method]
         assert cfg["regularizer"]["scaling"] == "chi2"
         assert cfg["representation"]["parameters"] == "state-relation"
         assert cfg["init"] == {**cfg["init"], "kind": "band-tomography", "calibrate": True}
