@@ -67,7 +67,7 @@ def flame_mse(truth: np.ndarray, estimate: np.ndarray,
     truth, estimate = np.asarray(truth, np.float64), np.asarray(estimate, np.float64)
     if truth.shape != estimate.shape:
         raise ValueError(f"truth {truth.shape} and estimate {estimate.shape} differ in shape")
-    region = (truth[0] > threshold) | (estimate[0] > threshold)
+    region = _hot(truth, threshold) | _hot(estimate, threshold)
     if not region.any():
         return {}
     return normalized_mse(truth[:, region][..., None, None], estimate[:, region][..., None, None],
@@ -95,18 +95,18 @@ def hot_volume_ratio(truth: np.ndarray, estimate: np.ndarray, threshold: float =
 
     A reconstruction that lost the flame (e.g. smoothed to ambient air) has a ratio near 0 even
     when its MSE looks good, because the MSE over a mostly ambient domain rewards a flat field.
-
-    Parameters
-    ----------
-    truth, estimate : ndarray, shape (n_fields, nx, ny, nz)
-        Fields with temperature (K) first.
-    threshold : float, optional
-        Temperature in K (default 500).
+    The parameters are those of :func:`flame_mse`.
     """
-    hot = np.count_nonzero(np.asarray(truth)[0] > threshold)
+    hot = np.count_nonzero(_hot(truth, threshold))
     if hot == 0:
         raise ValueError(f"the truth has no voxel above {threshold} K")
-    return float(np.count_nonzero(np.asarray(estimate)[0] > threshold) / hot)
+    return float(np.count_nonzero(_hot(estimate, threshold)) / hot)
+
+
+def _hot(fields: np.ndarray, threshold: float) -> np.ndarray:
+    """The voxels of ``fields`` (temperature in K first) above ``threshold`` K, shape (nx, ny,
+    nz)."""
+    return np.asarray(fields)[0] > threshold
 
 
 def peak_memory_mb() -> float:
@@ -134,7 +134,7 @@ def field_scores(truth: np.ndarray, estimate: np.ndarray, threshold: float = 500
     :func:`flame_mse`) and ``hot_volume_ratio`` (None when the truth has no voxel above
     ``threshold`` K), over the fields of :func:`common_fields`."""
     truth, estimate = common_fields(truth, estimate)
-    hot = np.any(np.asarray(truth)[0] > threshold)
+    hot = np.any(_hot(truth, threshold))
     return {"mse": normalized_mse(truth, estimate),
             "mse_flame": flame_mse(truth, estimate, threshold),
             "hot_volume_ratio": hot_volume_ratio(truth, estimate, threshold) if hot else None}

@@ -28,6 +28,13 @@ def common_operands(frame):
             argument(frame, 4, 1, INDEX), argument(frame, 5, 1, INDEX))
 
 
+@numba.njit(inline="always")
+def start_ray(coef, order, q):
+    wide_vectors()
+    n_eta = coef.shape[2]
+    return flush_subnormals(), order[q], np.zeros(n_eta, coef.dtype), np.ones(n_eta, coef.dtype)
+
+
 @numba.njit(fastmath=True, inline="always")
 def forward_step(c, j, u, {a_}through, partial):
     zero = c.dtype.type(0)
@@ -40,11 +47,7 @@ def forward_step(c, j, u, {a_}through, partial):
 def forward(coef, index, amount, offset, n_segments, order, background, radiance):
     n_rays, n_eta = amount.shape[0], coef.shape[2]
     for q in numba.prange(n_rays):
-        wide_vectors()
-        control = flush_subnormals()
-        i = order[q]
-        partial_sum = np.zeros(n_eta, coef.dtype)
-        through = np.ones(n_eta, coef.dtype)
+        control, i, partial_sum, through = start_ray(coef, order, q)
         k = 0
         while k < n_segments[i]:
             c, u = coef[index[i, k]], offset[i, k]
@@ -93,12 +96,8 @@ def forward_mode(coef, index, amount, offset, n_segments, order, background, d_a
                  d_offset, d_background, radiance, d_radiance):
     n_rays, n_eta = amount.shape[0], coef.shape[2]
     for q in numba.prange(n_rays):
-        wide_vectors()
-        control = flush_subnormals()
-        i = order[q]
-        partial_sum = np.zeros(n_eta, coef.dtype)
+        control, i, partial_sum, through = start_ray(coef, order, q)
         d_sum = np.zeros(n_eta, coef.dtype)
-        through = np.ones(n_eta, coef.dtype)
         depth = np.zeros(n_eta, coef.dtype)  # tangent of the optical depth in front
         k = 0
         while k < n_segments[i]:
@@ -157,12 +156,8 @@ def reverse(coef, index, amount, offset, n_segments, order, radiance, cotangent,
     n_rays, n_eta = amount.shape[0], coef.shape[2]
     zero = coef.dtype.type(0)
     for q in numba.prange(n_rays):
-        wide_vectors()
-        control = flush_subnormals()
-        i = order[q]
+        control, i, partial_sum, through = start_ray(coef, order, q)
         d_weights[i, n_segments[i]:] = zero
-        partial_sum = np.zeros(n_eta, coef.dtype)
-        through = np.ones(n_eta, coef.dtype)
         for k in range(n_segments[i]):
             c, u = coef[index[i, k]], offset[i, k]
             {amounts}
@@ -188,7 +183,9 @@ def reverse_handler(frame):
 (:func:`operators.rte.numba_targets.target`). The forward and forward-mode sweeps take a
 segment, or two consecutive segments in the same temperature interval (their table rows read
 once for both), in one pass over wavenumber, the reverse sweep one segment; each sweep's step
-at one wavenumber is an inlined function. The sweeps write into XLA's result buffers; a
+at one wavenumber is an inlined function, and so is the start of every ray (``start_ray``: the
+widest vectors, subnormals flushed until ``restore_control``, the ray's index in ``order``,
+its running sum and transmission). The sweeps write into XLA's result buffers; a
 background of one row serves every ray. Each ``{…}`` stands for a line, an expression or names
 written out gas by gas (:func:`gas_code`), which
 :func:`operators.rte.numba_targets.compiled_sweeps` fills in for the tables' gases, or for the

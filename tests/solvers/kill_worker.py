@@ -12,7 +12,7 @@
     halfway through writing that iteration's checkpoint, leaving a torn temporary file beside
     the previous checkpoint.
 
-The tests in ``test_checkpoint.py`` import this file by path for :func:`make_problem` and
+The tests in ``test_checkpoint.py`` import this module for :func:`make_problem` and
 :func:`make_solver`, so the killed run and the runs they compare it with share one definition.
 """
 

@@ -1,12 +1,10 @@
 """Checkpoints and resume: an interrupted run, resumed, equals an uninterrupted one."""
 
-import importlib.util
 import io
 import os
 import signal
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pylops
@@ -15,6 +13,8 @@ import pytest
 import operators as op
 import solvers
 from solvers.checkpoint import save_checkpoint
+
+from . import kill_worker
 
 OPTIONS = {"gd": {}, "adam": {"lr": 0.05}, "gauss-newton": {}, "lbfgs": {},
            "pdhg": {"inner_iter": 10}, "jaxopt-lbfgs": {},
@@ -218,25 +218,16 @@ def test_checkpoint_writers_use_their_own_temporary_files(tmp_path, monkeypatch)
     np.testing.assert_array_equal(solvers.load_checkpoint(path).x, np.full(3, 2.0))
 
 
-def _kill_worker():
-    spec = importlib.util.spec_from_file_location("kill_worker",
-                                                  Path(__file__).with_name("kill_worker.py"))
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-WORKER = _kill_worker()
 KILL_RNG = np.random.default_rng(20261123)
 KILL_MODES = dict(zip(solvers.available(),
-                      np.resize(KILL_RNG.permutation(WORKER.MODES), len(solvers.available())),
+                      np.resize(KILL_RNG.permutation(kill_worker.MODES), len(solvers.available())),
                       strict=True))
 """A mode of death for each solver, every mode used (see ``kill_worker.py``)."""
 
 
 def _killed_run(name, path, iteration, mode):
     """Run ``kill_worker.py`` until it kills itself with SIGKILL at ``iteration``."""
-    done = subprocess.run([sys.executable, WORKER.__file__, name, str(path), str(iteration),
+    done = subprocess.run([sys.executable, kill_worker.__file__, name, str(path), str(iteration),
                            mode], capture_output=True, text=True, timeout=120,
                           env={**os.environ, "PYTHONWARNINGS": "ignore"})
     assert done.returncode == -signal.SIGKILL, done.stderr
@@ -251,24 +242,32 @@ def _kill_iteration(name, iterations, mode):
     return int(rng.integers(first + (mode == "mid-write"), iterations))
 
 
+def _killed_and_resumed(tmp_path, name):
+    """Solver ``name`` run uninterrupted, and run by ``kill_worker.py`` until it dies at a
+    seeded random iteration (in its mode of :data:`KILL_MODES`), then resumed from the
+    checkpoint left behind: the full and the resumed run, the iteration of death and the
+    checkpoint's iteration."""
+    solver, problem = kill_worker.make_solver(name), kill_worker.make_problem(name)
+    full = solver.run(problem, seed=kill_worker.SEED)  # kill_worker.run; one solver keeps its jit
+    iteration = _kill_iteration(name, full.iterations, KILL_MODES[name])
+    path = tmp_path / "run.npz"
+    _killed_run(name, path, iteration, KILL_MODES[name])
+    saved = solvers.load_checkpoint(path).meta["iteration"]
+    return full, solver.run(problem, resume=path), iteration, saved
+
+
 @pytest.mark.parametrize("name", EXACT)
 def test_a_run_killed_at_a_random_point_resumes_bit_for_bit(tmp_path, name):
     """Every solver that resumes exactly: a process running it dies by SIGKILL at a random
     iteration (after a checkpoint, before one, or halfway through writing one); the run resumed
     from the checkpoint left behind equals the uninterrupted run bit for bit."""
-    solver, problem = WORKER.make_solver(name), WORKER.make_problem(name)
-    full = solver.run(problem, seed=WORKER.SEED)  # as WORKER.run; one solver keeps its jit
-    mode = KILL_MODES[name]
-    iteration = _kill_iteration(name, full.iterations, mode)
-    path = tmp_path / "run.npz"
-    _killed_run(name, path, iteration, mode)
+    full, resumed, iteration, saved = _killed_and_resumed(tmp_path, name)
     # before-save dies at `iteration` before its save: the last even iteration below it
-    saved = {"after-save": iteration, "before-save": (iteration - 1) - (iteration - 1) % 2,
-             "mid-write": iteration - 1}[mode]
-    assert solvers.load_checkpoint(path).meta["iteration"] == saved
-    resumed = solver.run(problem, resume=path)
+    assert saved == {"after-save": iteration,
+                     "before-save": (iteration - 1) - (iteration - 1) % 2,
+                     "mid-write": iteration - 1}[KILL_MODES[name]]
 
-    assert resumed.iterations == full.iterations and resumed.seed == WORKER.SEED
+    assert resumed.iterations == full.iterations and resumed.seed == kill_worker.SEED
     assert resumed.stop_reason == full.stop_reason
     np.testing.assert_array_equal(resumed.x, full.x)
     for column in ("iteration", "loss", "misfit", "regularizer", "grad_norm"):
@@ -283,16 +282,8 @@ def test_a_killed_scipy_lbfgs_run_resumes_to_the_same_minimum(tmp_path):
     can no longer lower the loss in float64, i.e. to the minimizer, so their final losses agree
     to 1e-10 relative (the loss near a minimizer changes quadratically, far below that over
     the distance between two such end points; float64 resolves 2e-16)."""
-    name = "lbfgs"
-    assert not solvers.get(name).exact_resume
-    solver, problem = WORKER.make_solver(name), WORKER.make_problem(name)
-    full = solver.run(problem, seed=WORKER.SEED)  # as WORKER.run; one solver keeps its jit
-    mode = KILL_MODES[name]
-    iteration = _kill_iteration(name, full.iterations, mode)
-    path = tmp_path / "run.npz"
-    _killed_run(name, path, iteration, mode)
-    saved = solvers.load_checkpoint(path).meta["iteration"]
-    resumed = solver.run(problem, resume=path)
+    assert not solvers.get("lbfgs").exact_resume
+    full, resumed, _, saved = _killed_and_resumed(tmp_path, "lbfgs")
 
     for column in ("iteration", "loss", "misfit", "regularizer", "grad_norm"):
         np.testing.assert_array_equal(resumed.history[column][:saved + 1],

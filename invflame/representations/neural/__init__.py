@@ -5,6 +5,7 @@
 ``sampling``       sample placement along rays (stratified, importance, Planck-mean opacity)
 ``renderer``       pixel spectra rendered from field functions (:class:`NeuralRenderer`)
 ``regularizers``   the voxel regularizer of a network at the voxel centres
+``weights``        network weights as a representation's unknowns, and their start
 ``field``          the NeRF-like representation (:class:`NeuralFieldRepresentation`)
 ``centres``        the network at the voxel centres (:class:`NeuralCentresRepresentation`)
 =================  ===================================================================

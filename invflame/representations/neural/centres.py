@@ -21,16 +21,16 @@ import torch
 
 import solvers
 from invflame.representations.curvature import group_curvature, quadratic_weight
-from invflame.representations.neural.network import FieldNetwork, centre_points, start_network
+from invflame.representations.neural.network import FieldNetwork, centre_points
 from invflame.representations.neural.regularizers import regularizer_after
+from invflame.representations.neural.weights import NetworkWeights
 from invflame.representations.normalization import field_scales, per_field
-from invflame.representations.protocol import Representation
 from invflame.representations.state_relation import StateRelation
 from invflame.representations.whitening import whitened
 from operators import Diagonal, Operator, TorchOperator
 
 
-class NeuralCentresRepresentation(Representation):
+class NeuralCentresRepresentation(NetworkWeights):
     """Network weights as unknowns, the network sampled at the voxel centres.
 
     Parameters
@@ -62,7 +62,7 @@ class NeuralCentresRepresentation(Representation):
         self.dtype = np.dtype(scene.dtype)
         self.network = FieldNetwork.for_scene(scene, n_frequencies, hidden, depth, seed,
                                               state_relation, grid_levels)
-        self.n_parameters = self.network.n_parameters
+        self.networks = (self.network,)
         self.centres = centre_points(scene.grid, self.network.lower.dtype)
         shape = (4, *self.grid.shape)
 
@@ -76,27 +76,6 @@ class NeuralCentresRepresentation(Representation):
         self.normalized_at_centres = Diagonal(1.0 / per_field(field_scales(), shape),
                                               dtype=self.dtype, name="normalize") @ self.at_centres
         self.forward = (scene.operator if forward is None else forward) @ self.at_centres
-
-    def initial_parameters(self, fields=None, iterations: int = 1000, lr: float = 1e-3,
-                           seed: int = 0, progress: bool = True,
-                           offset: bool = False) -> np.ndarray:
-        """Starting weights: the network pretrained on ``fields``, or offset by them (or as
-        initialized).
-
-        Parameters
-        ----------
-        fields : Field or ndarray, shape (4, nx, ny, nz), optional
-            Voxel fields (T in K, mole fractions), e.g. the noisy initial field of the voxel
-            run; None keeps the current weights.
-        iterations, lr, seed, progress
-            Passed to :func:`~invflame.representations.neural.network.pretrain`.
-        offset : bool, optional
-            Start the network at ``fields`` exactly and let it learn the correction
-            (:meth:`FieldNetwork.offset_by`) instead of pretraining it.
-        """
-        if fields is not None:
-            start_network(self.network, fields, offset, iterations, lr, seed, progress)
-        return self.network.parameter_vector().astype(self.dtype)
 
     def regularizer(self, kind: str) -> solvers.Regularizer | None:
         r""":math:`\Phi = g \circ (D \circ u_\theta(c))` for ``kind`` in {"none", "tikhonov",

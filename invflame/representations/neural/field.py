@@ -65,11 +65,11 @@ import numpy as np
 import torch
 
 import solvers
-from invflame.representations.neural.network import FieldNetwork, centre_points, start_network
+from invflame.representations.neural.network import FieldNetwork, centre_points
 from invflame.representations.neural.regularizers import CentreRegularizer, regularizer_after
 from invflame.representations.neural.renderer import NeuralRenderer
 from invflame.representations.neural.sampling import PlanckMeanOpacity
-from invflame.representations.protocol import Representation
+from invflame.representations.neural.weights import NetworkWeights
 from invflame.representations.state_relation import StateRelation
 from invflame.representations.whitening import noise_weights, whitened
 from operators import Operator, TorchOperator
@@ -235,7 +235,7 @@ class StochasticObjective:
         return value, to_numpy(theta.grad)
 
 
-class NeuralFieldRepresentation(Representation):
+class NeuralFieldRepresentation(NetworkWeights):
     """Coarse and fine neural fields rendered along the rays: the paper's NN representation.
 
     Parameters
@@ -281,7 +281,7 @@ class NeuralFieldRepresentation(Representation):
         network = partial(FieldNetwork.for_scene, scene, n_frequencies, hidden, depth,
                           state_relation=state_relation, grid_levels=grid_levels)
         self.coarse, self.fine = network(seed=seed), network(seed=seed + 1)
-        self.n_parameters = self.coarse.n_parameters + self.fine.n_parameters
+        self.networks = (self.coarse, self.fine)
         self.centres = centre_points(scene.grid, self.renderer.dtype)
         self.batch_centres = min(int(batch_centres), self.grid.n_voxels)
 
@@ -309,32 +309,6 @@ class NeuralFieldRepresentation(Representation):
             raise ValueError(f"parameters must have shape ({self.n_parameters},) (coarse then "
                              f"fine weights); got {tuple(theta.shape)}")
         return theta[:self.coarse.n_parameters], theta[self.coarse.n_parameters:]
-
-    def initial_parameters(self, fields=None, iterations: int = 1000, lr: float = 1e-3,
-                           seed: int = 0, progress: bool = True,
-                           offset: bool = False) -> np.ndarray:
-        """Starting weights: both networks pretrained on ``fields``, or offset by them (or as
-        initialized).
-
-        Parameters
-        ----------
-        fields : Field or ndarray, shape (4, nx, ny, nz), optional
-            Voxel fields on the scene's grid (T in K, mole fractions), e.g. the noisy initial
-            field of the voxel run; None keeps the networks' current weights.
-        iterations, lr, seed, progress
-            Passed to :func:`~invflame.representations.neural.network.pretrain`.
-        offset : bool, optional
-            Start both networks at ``fields`` exactly and let them learn the correction
-            (:meth:`FieldNetwork.offset_by`) instead of pretraining them.
-
-        Returns
-        -------
-        ndarray, shape (n_parameters,)
-        """
-        if fields is not None:
-            for network in (self.coarse, self.fine):
-                start_network(network, fields, offset, iterations, lr, seed, progress)
-        return np.concatenate([self.coarse.parameter_vector(), self.fine.parameter_vector()])
 
     # -- the problem ----------------------------------------------------------------------
     def regularizer(self, kind: str) -> solvers.Regularizer | None:

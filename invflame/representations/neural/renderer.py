@@ -41,6 +41,35 @@ keep about 2 kB per point for the backward pass (float32, the default network), 
 holds about 250 MB (``benchmarks/bench_neural.py`` prints the peak memory)."""
 
 
+def voxel_lookup(grid, values, dtype: torch.dtype | None = None):
+    """Voxel values as a function of position, piecewise constant per voxel.
+
+    Parameters
+    ----------
+    grid : invflame.geometry.VoxelGrid
+        The voxels (m).
+    values : ndarray, shape (..., nx, ny, nz)
+        Per voxel, in any units.
+    dtype : torch.dtype, optional
+        Of the values and of the positions (default: that of ``values``).
+
+    Returns
+    -------
+    callable
+        ``points (..., 3) in m -> values (...leading of values, ...points)``; a point outside
+        the grid takes the value of the nearest voxel along each axis.
+    """
+    values = torch.tensor(values, dtype=dtype)
+    lower, spacing = (torch.tensor(a, dtype=values.dtype) for a in (grid.lower, grid.spacing))
+    top = torch.tensor(grid.shape) - 1
+
+    def at(points: torch.Tensor) -> torch.Tensor:
+        index = torch.minimum(torch.floor((points - lower) / spacing).long().clamp_min(0), top)
+        return values[..., index[..., 0], index[..., 1], index[..., 2]]
+
+    return at
+
+
 class NeuralRenderer:
     """Coarse-to-fine rendering of measured pixel spectra from field functions.
 
@@ -108,12 +137,7 @@ class NeuralRenderer:
         self.opacity = PlanckMeanOpacity.from_table(scene.table) if opacity is None else opacity
         self._background, self._camera = self._background_per_camera(scene)
         self._soot = (None if getattr(scene, "soot", None) is None
-                      else torch.tensor(scene.soot, dtype=self.dtype))
-        if self._soot is not None:
-            grid = scene.grid
-            self._lower, self._spacing = (torch.tensor(a, dtype=self.dtype)
-                                          for a in (grid.lower, grid.spacing))
-            self._top = torch.tensor(grid.shape) - 1
+                      else voxel_lookup(scene.grid, scene.soot, self.dtype))
         tables = scene.tables
         kernel_batch = batch_rays_for(tables, 2 * self.chunk_rays * self.rays_per_pixel,
                                       scene.memory_budget)
@@ -209,10 +233,7 @@ class NeuralRenderer:
         volume fraction at ``points`` ``(R, n, 3)`` (m) appended when it has soot."""
         if self._soot is None:
             return fields
-        index = torch.floor((points - self._lower) / self._spacing).long()
-        index = torch.minimum(index.clamp_min(0), self._top)
-        soot = self._soot[index[..., 0], index[..., 1], index[..., 2]]
-        return torch.cat([fields, soot[None]])
+        return torch.cat([fields, self._soot(points)[None]])
 
     def _background_of(self, rays: torch.Tensor) -> tuple[torch.Tensor, ...]:
         """The kernel's background argument for sub-rays ``rays``: ``()`` without one."""

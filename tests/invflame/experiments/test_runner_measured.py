@@ -16,6 +16,17 @@ from invflame.measurement_file import MeasurementFile, read_measurement, write_m
 
 SPECTRUM = {"min": 660.0, "max": 690.0, "step": 0.1}
 SOLVER = {"name": "adam", "iterations": 4, "options": {"lr": 0.01}}
+MEASURED = f"""
+[truth]
+grid = 8
+[data]
+source = "m.nc"
+[spectrum]
+min = {SPECTRUM['min']}
+max = {SPECTRUM['max']}
+step = {SPECTRUM['step']}
+"""
+"""A run on the 8^3 grid from the measurement file m.nc over :data:`SPECTRUM`, as TOML."""
 
 
 def toml(path, text):
@@ -61,17 +72,9 @@ def test_a_file_run_without_truth_and_with_it_matches_the_in_memory_run(simulate
                                                                        monkeypatch):
     folder, simulate_cfg, rig = simulated
     monkeypatch.chdir(folder)
-    measured_cfg = toml(folder / "run.toml", f"""
-[truth]
-grid = 8
+    measured_cfg = toml(folder / "run.toml", MEASURED + """
 [rig]
 file = "rig.toml"
-[data]
-source = "m.nc"
-[spectrum]
-min = {SPECTRUM['min']}
-max = {SPECTRUM['max']}
-step = {SPECTRUM['step']}
 [instrument]
 margin = 0  # the file's data were simulated on this window: model it alike
 """)
@@ -102,15 +105,7 @@ margin = 0  # the file's data were simulated on this window: model it alike
 def test_the_command_line_runs_from_the_file_alone(simulated, tmp_path, monkeypatch, capsys):
     folder, _, _ = simulated
     monkeypatch.chdir(folder)
-    cfg = toml(tmp_path / "run.toml", f"""
-[truth]
-grid = 8
-[data]
-source = "m.nc"
-[spectrum]
-min = {SPECTRUM['min']}
-max = {SPECTRUM['max']}
-step = {SPECTRUM['step']}
+    cfg = toml(tmp_path / "run.toml", MEASURED + """
 [solver]
 name = "adam"
 iterations = 2

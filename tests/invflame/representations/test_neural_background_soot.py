@@ -7,9 +7,8 @@ import torch
 import operators
 from invflame.background import MeasuredBackground
 from invflame.representations.neural import NeuralFieldRepresentation, NeuralRenderer
+from invflame.representations.neural.renderer import voxel_lookup
 from operators.rte.planck import planck
-
-from .test_neural_rendering import _voxel_lookup
 
 
 def _per_camera_background(n_cameras: int = 2) -> MeasuredBackground:
@@ -57,7 +56,7 @@ def test_rendering_with_background_and_soot_converges_to_the_voxel_map(dressed64
     """Sampled finely, a voxel field with soot varying per voxel, in front of a background,
     renders as the voxel map does."""
     expected = dressed64.simulate(plume)
-    field = _voxel_lookup(dressed64.grid, plume)
+    field = voxel_lookup(dressed64.grid, plume)
     renderer = NeuralRenderer(dressed64, n_coarse=256, n_fine=256)
     _, fine = renderer.render(torch.arange(renderer.n_rays), field, field,
                               *renderer.deterministic_draws())

@@ -9,6 +9,7 @@ import torch
 import operators
 import solvers
 from invflame.representations.neural import NeuralFieldRepresentation, NeuralRenderer
+from invflame.representations.neural.renderer import voxel_lookup
 from invflame.representations.neural.sampling import (
     PlanckMeanOpacity,
     emission_weights,
@@ -63,19 +64,6 @@ def test_planck_mean_opacity_interpolates_the_table(tiny_table):
     assert np.all(expected > 0)
 
 
-def _voxel_lookup(grid, values):
-    """The voxel field as a function of position: piecewise constant per voxel."""
-    values = torch.tensor(values)
-    lower, spacing = torch.tensor(grid.lower), torch.tensor(grid.spacing)
-    top = torch.tensor(grid.shape) - 1
-
-    def field(points):
-        i = torch.minimum(torch.floor((points - lower) / spacing).long().clamp_min(0), top)
-        return values[:, i[..., 0], i[..., 1], i[..., 2]]
-
-    return field
-
-
 @pytest.mark.parametrize("scene_name", ["tiny_scene64", "pixel_scene64"])
 def test_rendering_converges_to_the_voxel_forward_map(scene_name, plume, request):
     """Sampled finely, the renderer of a voxel field reproduces the voxel forward map: the
@@ -83,7 +71,7 @@ def test_rendering_converges_to_the_voxel_forward_map(scene_name, plume, request
     where samples straddle voxel faces."""
     scene = request.getfixturevalue(scene_name)
     expected = scene.simulate(plume)
-    field = _voxel_lookup(scene.grid, plume)
+    field = voxel_lookup(scene.grid, plume)
     renderer = NeuralRenderer(scene, n_coarse=256, n_fine=256)
     assert renderer.batch_sub_rays == scene.n_rays * scene.rays_per_pixel
     coarse, fine = renderer.render(torch.arange(renderer.n_rays), field, field,
@@ -106,7 +94,7 @@ def test_a_pixel_is_the_mean_of_its_sub_rays(pixel_scene64, plume):
         n_rays=scene.segments.n_rays, rays_per_pixel=1, segments=scene.segments,
         dtype=scene.dtype, ils=scene.ils, table=scene.table, tables=scene.tables,
         memory_budget=scene.memory_budget)
-    field = _voxel_lookup(scene.grid, plume)
+    field = voxel_lookup(scene.grid, plume)
     pixels, sub_rays = (NeuralRenderer(s, n_coarse=16, n_fine=0) for s in (scene, as_pixels))
     assert sub_rays.n_rays == 4 * pixels.n_rays
     mean = pixels.render(torch.arange(pixels.n_rays), field, field,
