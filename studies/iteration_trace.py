@@ -1,7 +1,7 @@
 r"""How a study row's fit moves along its iterations: misfit, smoothness and distance to the truth.
 
 Usage: python studies/iteration_trace.py --truth FIELD.npz [--method VG/NR] [--lambda L]
-       [--iterations 200] [--every 10] [--hold-out FRACTION]
+       [--iterations 200] [--every 10] [--hold-out FRACTION] [--set SECTION.KEY=VALUE ...]
        python studies/iteration_trace.py --collect TRACE.txt ... [--levels 2 4 8] [--limit 100]
 
 Solves one method of the honest quick problem
@@ -28,6 +28,7 @@ import numpy as np
 
 import solvers
 from invflame.experiments import reproduce
+from invflame.experiments.config_text import parse_setting
 from invflame.experiments.method_problem import method_problem
 from invflame.experiments.parameters import physical_fields
 
@@ -110,10 +111,17 @@ if __name__ == "__main__":
     parser.add_argument("--iterations", type=int, default=200)
     parser.add_argument("--every", type=int, default=10)
     parser.add_argument("--hold-out", type=float, default=0.0, metavar="FRACTION")
+    parser.add_argument("--set", nargs="+", default=[], metavar="SECTION.KEY=VALUE",
+                        help="other settings of the method's configuration (VALUE in TOML)")
     args = parser.parse_args()
+    try:
+        settings = {(section, key): value
+                    for section, key, value in map(parse_setting, args.set)}
+    except ValueError as error:
+        parser.error(f"--set: {error}")
     if args.collect:
         collect(args.collect, args.levels, args.limit)
         raise SystemExit
     print(f"{args.method} on {args.truth}")
-    trace(method_problem(args.method, args.truth), args.lam, args.iterations, args.every,
-          args.hold_out)
+    trace(method_problem(args.method, args.truth, settings=settings), args.lam,
+          args.iterations, args.every, args.hold_out)

@@ -20,12 +20,12 @@ import argparse
 import csv
 import json
 import math
-import tomllib
 import warnings
 from pathlib import Path
 
 import solvers
 from invflame.experiments import config, reproduce, runner
+from invflame.experiments.config_text import parse_setting
 from invflame.experiments.model_error import estimate_model_error
 
 if __name__ == "__main__":
@@ -53,13 +53,11 @@ if __name__ == "__main__":
     args = parser.parse_args()
     cfg = reproduce.method_config("quick", args.method, 0, "honest", args.truth)
     for setting in args.set:
-        name, _, value = setting.partition("=")
-        section, _, key = name.partition(".")
-        sections = [k for k, v in cfg.items() if isinstance(v, dict)]
-        if section not in sections or not key or not value:
-            parser.error(f"--set {setting!r}: give SECTION.KEY=VALUE, SECTION one of "
-                         f"{', '.join(sections)}")
-        cfg[section][key] = tomllib.loads(f"v = {value}")["v"]
+        try:
+            section, key, value = parse_setting(setting)
+        except ValueError as error:
+            parser.error(f"--set: {error}")
+        cfg[section][key] = value
     cfg["regularizer"]["tv_smoothing"] = args.tv_smoothing
     cfg["representation"]["parameters"] = args.parameters
     cfg["init"]["calibrate"] = not args.no_calibrate

@@ -34,11 +34,13 @@ REPORT = ("poolfire_u0.01_t1.6", "poolfire_u0.01_t2.4", "poolfire_u0.01_t2.8",
 """Flames on which results are reported only."""
 
 
-def flames(half: str, family: Path) -> list[tuple[str, str]]:
-    """``(name, truth source)`` of each flame of a half; the packaged pool fire is 'poolfire'."""
+def flames(half: str, family: Path, only=None) -> list[tuple[str, str]]:
+    """``(name, truth source)`` of each flame of a half; the packaged pool fire is 'poolfire'.
+    Those named in ``only`` (all when None) must exist."""
     chosen = {"tuning": TUNING, "report": REPORT, "packaged": (), "all": TUNING + REPORT}[half]
     found = [(stem, str(family / f"{stem}.npz")) for stem in chosen]
-    missing = [source for _, source in found if not Path(source).is_file()]
+    missing = [source for stem, source in found if not Path(source).is_file()
+               and (only is None or stem in only)]
     if missing:
         raise SystemExit(f"error: missing {', '.join(missing)}: run "
                          "scripts/make_validation_family.sh first")
@@ -119,7 +121,7 @@ def main() -> None:
              "before calibration | CO2 / start | H2O / start | χ²/M | hot vol. | converged | "
              "flat air / MSE_T |",
              "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|:-:|---:|"]
-    chosen = flames(args.half, args.family)
+    chosen = flames(args.half, args.family, args.flames)
     unknown = set(args.flames or ()) - {name for name, _ in chosen}
     if unknown:
         parser.error(f"--flames {sorted(unknown)} not in the {args.half} half: "

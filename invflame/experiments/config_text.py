@@ -1,6 +1,7 @@
 """Configurations as text: TOML that reads back to the same values, and the documented key tables.
 
-:func:`dumps` writes a configuration as TOML; :func:`dumps_commented` writes a complete one with
+:func:`dumps` writes a configuration as TOML; :func:`parse_setting` reads one setting written
+``SECTION.KEY=VALUE``; :func:`dumps_commented` writes a complete one with
 a comment per key (``invflame config --show-defaults``); :func:`keys_markdown` writes the key
 tables of ``docs/guide/configuration.md`` (``invflame config --markdown``). Every key's unit,
 meaning and allowed values come from :mod:`invflame.experiments.config_schema`;
@@ -10,6 +11,7 @@ functions.
 
 from __future__ import annotations
 
+import tomllib
 from collections.abc import Iterator
 
 import tomli_w
@@ -119,3 +121,26 @@ def keys_markdown() -> str:
                        f"{allowed(key, path)} | {key.meaning} |")
         out.append("")
     return "\n".join(out)
+
+
+def parse_setting(text: str) -> tuple[str, str, object]:
+    """``(section, key, value)`` of a setting written ``SECTION.KEY=VALUE`` (VALUE in TOML,
+    e.g. ``solver.iterations=400`` or ``solver.name="adam"``).
+
+    Raises
+    ------
+    ValueError
+        When the text is not of that form, names no section of the schema or its value is
+        not TOML. The key and value are checked by :func:`~invflame.experiments.config.validate`.
+    """
+    name, _, value = text.partition("=")
+    section, _, key = name.strip().partition(".")
+    sections = [name for name, entry in SCHEMA.items() if isinstance(entry, Section)]
+    if section not in sections or not key or not value.strip():
+        raise ValueError(f"setting {text!r}: write SECTION.KEY=VALUE, SECTION one of "
+                         f"{', '.join(sections)}")
+    try:
+        return section, key, tomllib.loads(f"v = {value}")["v"]
+    except tomllib.TOMLDecodeError as error:
+        raise ValueError(f"setting {text!r}: its value is not TOML ({error}); quote a string, "
+                         "e.g. solver.name=\"adam\"") from error

@@ -10,6 +10,7 @@ import torch
 from invflame.representations.neural import NeuralCentresRepresentation, NeuralFieldRepresentation
 from invflame.representations.normalization import physical_bounds
 from invflame.representations.state_relation import StateRelation
+from invflame.representations.subvoxel import SubvoxelEmission
 from invflame.representations.voxel import VoxelRepresentation
 from invflame.scene import Scene
 
@@ -54,6 +55,17 @@ def state_relation(cfg: dict, scene: Scene) -> StateRelation:
                          cfg["representation"]["factor_range"], _t_range(scene)[1])
 
 
+def subvoxel_emission(cfg: dict, scene: Scene) -> SubvoxelEmission | None:
+    """The sub-voxel emission model of ``representation.subvoxel_spread`` with the
+    configuration's state relation; None when the spread is 0 or the representation is not
+    voxels of the state relation's parameters."""
+    settings = cfg["representation"]
+    if (settings["kind"], settings["parameters"]) != ("voxel", "state-relation") \
+            or settings["subvoxel_spread"] == 0:
+        return None
+    return SubvoxelEmission(state_relation(cfg, scene), settings["subvoxel_spread"])
+
+
 def make_representation(cfg: dict, scene: Scene):
     """The representation named by ``representation.kind`` on the scene, parameterized as
     ``representation.parameters`` says; for the networks, torch's default device set to
@@ -77,7 +89,8 @@ def make_representation(cfg: dict, scene: Scene):
     return VoxelRepresentation(scene.grid, scene.operator, temperature_range=_t_range(scene),
                                soot_max=cfg["soot"]["max"],
                                tv_smoothing=cfg["regularizer"]["tv_smoothing"],
-                               state_relation=relation)
+                               state_relation=relation,
+                               subvoxel=subvoxel_emission(cfg, scene))
 
 
 def starting_parameters(cfg: dict, representation, start: np.ndarray, progress: bool):
@@ -100,6 +113,14 @@ def physical_fields(scene: Scene, fields: np.ndarray) -> np.ndarray:
     fractions = fields[1:4]
     fractions /= np.maximum(fractions.sum(axis=0), 1.0)  # a network may exceed sum(X) = 1
     return fields
+
+
+def predicted_spectra(scene: Scene, representation, theta) -> np.ndarray:
+    """The spectra the model predicts for parameters ``theta``, shape ``(n_rays, n_out)``
+    in W/(m²·sr·cm⁻¹): the scene's simulation of the representation's rendered fields
+    (:meth:`~invflame.representations.protocol.Representation.rendered_fields`), clipped to
+    the physical bounds."""
+    return scene.simulate(physical_fields(scene, representation.rendered_fields(theta)))
 
 
 def _t_range(scene: Scene) -> tuple[float, float]:

@@ -74,6 +74,7 @@ from invflame.experiments.metrics import peak_memory_mb
 from invflame.experiments.parameters import (
     make_representation,
     physical_fields,
+    predicted_spectra,
     starting_parameters,
 )
 from invflame.experiments.regularization import (
@@ -94,12 +95,7 @@ from invflame.experiments.resume import (
 from invflame.experiments.run_folder import CHECKPOINT, SUMMARY, RunLock
 from invflame.experiments.run_log import Log, StageClock
 from invflame.experiments.start import initial_fields
-from invflame.experiments.summaries import (
-    chi2_per_value,
-    misfit_name,
-    protocol,
-    truth_scores,
-)
+from invflame.experiments.summaries import chi2_per_value, misfit_name, protocol, truth_scores
 from invflame.export import export_run
 from invflame.field import Field
 from invflame.geometry import VoxelGrid, ray_coverage
@@ -354,7 +350,7 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
     fields = physical_fields(scene, representation.fields(result.x))
     Field(scene.grid, fields,
           {"source": "reconstruction", "config": cfg}).save(out / "reconstruction.npz")
-    simulated = scene.simulate(fields)
+    simulated = predicted_spectra(scene, representation, result.x)
     write_npz(out / "data.npz", measured=measurement.data, simulated=simulated,
               sigma=measurement.sigma, out_wavenumber=scene.out_wavenumber)
     history = result.history.as_dict()
@@ -374,8 +370,9 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
         "converged": result.converged,
         "diverged": result.diverged,
         "loss": {"initial": history["loss"][0], "final": result.loss},
-        "chi2_per_measurement": {"initial": chi2_per_value(scene.simulate(start), measurement),
-                                 "final": chi2_per_value(simulated, measurement)},
+        "chi2_per_measurement": {
+            "initial": chi2_per_value(predicted_spectra(scene, representation, x0), measurement),
+            "final": chi2_per_value(simulated, measurement)},
         "noisy_data": measurement.noisy,
         "noise_weighted_misfit": reg["scaling"] == "chi2" and measurement.noisy,
         **({} if truth is None else truth_scores(truth.values, fields, start)),

@@ -60,6 +60,12 @@ class Representation(Protocol):
         ``theta``."""
         ...
 
+    def rendered_fields(self, theta) -> np.ndarray:
+        """The physical fields the forward map renders for ``theta``: :meth:`fields`, unless
+        the representation renders a voxel otherwise than its reported mean state (a
+        sub-voxel emission model, :mod:`invflame.representations.subvoxel`)."""
+        return self.fields(theta)
+
     @staticmethod
     def parameter_bytes(theta) -> int:
         """Memory of the parameters ``theta`` in bytes."""

@@ -20,6 +20,7 @@ from invflame.representations.normalization import (
 )
 from invflame.representations.protocol import Representation
 from invflame.representations.state_relation import StateRelation
+from invflame.representations.subvoxel import SubvoxelEmission
 from invflame.representations.whitening import whitened
 
 REGULARIZERS = ("none", "tikhonov", "tv")
@@ -86,6 +87,11 @@ class VoxelRepresentation(Representation):
         ``state_relation.states(s, h)``, and with soot its normalized volume fraction a third
         field; None (default): the normalized fields. Its ``temperature_max`` should not
         exceed ``temperature_range[1]``.
+    subvoxel : SubvoxelEmission, optional
+        With a ``state_relation``: render each voxel at the emission-equivalent progress of a
+        presumed spread inside it (:mod:`invflame.representations.subvoxel`), the mean
+        progress staying the parameter and the reported field; None (default): render the
+        mean state.
     """
 
     kind = "voxel"
@@ -93,13 +99,18 @@ class VoxelRepresentation(Representation):
 
     def __init__(self, grid: VoxelGrid, forward: op.Operator,
                  temperature_range=(250.0, 2500.0), soot_max: float = SOOT_MAX,
-                 tv_smoothing: float = 0.0, state_relation: StateRelation | None = None):
+                 tv_smoothing: float = 0.0, state_relation: StateRelation | None = None,
+                 subvoxel: SubvoxelEmission | None = None):
         if tuple(forward.dims) not in ((4, *grid.shape), (5, *grid.shape)):
             raise ValueError(f"forward map takes {forward.dims}, expected {(4, *grid.shape)} "
                              f"(or 5 fields with soot) for a {grid.shape} grid")
+        if subvoxel is not None and state_relation is None:
+            raise ValueError("a sub-voxel emission model renders the state relation's progress: "
+                             "give state_relation too")
         self.grid = grid
         self.tv_smoothing = float(tv_smoothing)
         self.state_relation = state_relation
+        self.subvoxel = subvoxel
         self.field_dims = tuple(forward.dims)
         n_fields = forward.dims[0]
         bounds = physical_bounds(*temperature_range, soot_max if n_fields == 5 else None)
@@ -111,7 +122,8 @@ class VoxelRepresentation(Representation):
         else:  # (s, h) and, with soot, its normalized volume fraction
             dims = (n_fields - 2, *grid.shape)
             self.forward = forward @ op.JaxOperator(
-                lambda theta: _relation_fields(state_relation, theta, jnp), dims, forward.dims,
+                lambda theta: _relation_fields(state_relation, theta, jnp, subvoxel), dims,
+                forward.dims,
                 dtype=forward.dtype, name="state relation")
             low, high = state_relation.factor_range
             lower = np.concatenate([[0.0, low], lower[4:]])
@@ -186,10 +198,20 @@ class VoxelRepresentation(Representation):
             return denormalize(theta)
         return _relation_fields(self.state_relation, theta.astype(np.float64), np)
 
+    def rendered_fields(self, theta) -> np.ndarray:
+        """The physical fields the forward map renders: :meth:`fields`, with a sub-voxel
+        model at each voxel's emission-equivalent progress."""
+        if self.subvoxel is None:
+            return self.fields(theta)
+        theta = np.asarray(theta, dtype=np.float64).reshape(self.dims)
+        return _relation_fields(self.state_relation, theta, np, self.subvoxel)
 
-def _relation_fields(relation: StateRelation, theta, xp):
+
+def _relation_fields(relation: StateRelation, theta, xp, subvoxel=None):
     """Physical fields of state-relation parameters ``(s, h[, u_soot])`` per voxel, in the
-    array module ``xp`` (NumPy or ``jax.numpy``): the relation's states, then the soot volume
-    fraction from its normalized value."""
-    return xp.concatenate([xp.stack(relation.states(theta[0], theta[1])),
+    array module ``xp`` (NumPy or ``jax.numpy``): the relation's states (at the rendered
+    progress of ``subvoxel`` when given), then the soot volume fraction from its normalized
+    value."""
+    progress = theta[0] if subvoxel is None else subvoxel.rendered(theta[0], theta[1], xp)
+    return xp.concatenate([xp.stack(relation.states(progress, theta[1])),
                            theta[2:] * SOOT_SCALE])

@@ -1,4 +1,4 @@
-"""Configurations written as TOML read back to the same values."""
+"""Configurations written as TOML read back to the same values; one setting read from text."""
 
 import math
 import tomllib
@@ -6,6 +6,7 @@ import tomllib
 import pytest
 
 from invflame.experiments import config
+from invflame.experiments.config_text import parse_setting
 
 
 def test_validated_configuration_round_trips_through_a_file(tmp_path):
@@ -46,3 +47,15 @@ def test_every_value_kind_is_written_back_exactly():
 def test_value_without_a_toml_form_is_refused_with_its_type():
     with pytest.raises(TypeError, match="NoneType"):
         config.dumps({"noise": {"nesr": None}})
+
+
+def test_a_setting_reads_as_section_key_and_toml_value_or_says_what_is_wrong():
+    assert parse_setting("solver.iterations=400") == ("solver", "iterations", 400)
+    assert parse_setting('solver.name = "adam"') == ("solver", "name", "adam")
+    assert parse_setting("representation.factor_range=[0.5, 2]") == (
+        "representation", "factor_range", [0.5, 2])
+    for text, problem in (("iterations=400", "SECTION.KEY=VALUE"),
+                          ("seed.x=1", "SECTION one of"), ("solver.iterations=", "SECTION"),
+                          ("solver.name=adam", "not TOML")):
+        with pytest.raises(ValueError, match=problem):
+            parse_setting(text)

@@ -12,6 +12,7 @@ import torch
 import solvers
 from invflame.experiments import comparison_table, config, reproduce, runner
 from invflame.experiments.machine import describe_machine, in_words
+from invflame.experiments.parameters import subvoxel_emission
 from invflame.field import Field
 
 TINY = {
@@ -311,3 +312,18 @@ def test_stop_chi2_ends_the_solve_at_the_first_iterate_within_the_level(tmp_path
     with pytest.raises(config.ConfigError, match="these data have no noise σ"):
         runner.run_experiment(tiny(solver={**TINY["solver"], "stop_chi2": 2.0},
                                    noise={"kind": "none"}), tmp_path / "free", progress=False)
+
+
+def test_a_subvoxel_model_renders_what_the_summary_scores_on_voxels_only(tmp_path):
+    cfg = tiny(representation={"subvoxel_spread": 1.0},
+               solver={"name": "lbfgs", "iterations": 3, "options": {}})
+    summary = runner.run_experiment(cfg, tmp_path, progress=False)
+    data = np.load(tmp_path / "data.npz")
+    chi2 = np.mean(((data["simulated"] - data["measured"]) / data["sigma"]) ** 2)
+    assert summary["chi2_per_measurement"]["final"] == pytest.approx(chi2, rel=1e-6)
+    mean_state = runner.build_scene(cfg).simulate(
+        Field.load(tmp_path / "reconstruction.npz").values)
+    assert data["simulated"].sum() > mean_state.sum()  # rendered above the reported mean
+    for representation in ({"kind": "neural-centres"}, {"parameters": "fields"}):
+        off = tiny(representation={"subvoxel_spread": 1.0, **representation})
+        assert subvoxel_emission(off, runner.build_scene(off)) is None  # voxels' only
