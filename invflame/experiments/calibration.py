@@ -72,7 +72,7 @@ class Calibration:
 
 
 def calibrate_start(scene, data, start, relation: StateRelation, sigma=None,
-                    tolerance: float = 0.01, subvoxel=None) -> Calibration:
+                    tolerance: float = 0.01) -> Calibration:
     r"""Fit the amplitude :math:`a` and temperature factor :math:`h` of a start to the data.
 
     Parameters
@@ -91,10 +91,6 @@ def calibrate_start(scene, data, start, relation: StateRelation, sigma=None,
         unweighted misfit.
     tolerance : float, optional
         Of :math:`\log a` and :math:`h` (dimensionless) for the simplex (default 0.01).
-    subvoxel : SubvoxelEmission, optional
-        Render the states at their emission-equivalent progress
-        (:mod:`invflame.representations.subvoxel`), as the reconstruction does; the returned
-        fields keep the mean progress. None (default): render the mean states.
 
     Returns
     -------
@@ -104,14 +100,12 @@ def calibrate_start(scene, data, start, relation: StateRelation, sigma=None,
     weights = noise_weights(sigma, data.shape)
     weights = np.ones(data.shape) if weights is None else weights
     counted = max(int(np.count_nonzero(weights)), 1)
-    progress, start_factor = relation.invert(start[:4])
+    progress = relation.invert(start[:4])[0]
     low, high = relation.factor_range
     evaluations = 0
 
-    def fields_at(log_amplitude, factor, rendered=False):
+    def fields_at(log_amplitude, factor):
         s = np.minimum(np.exp(log_amplitude) * progress, relation.progress_max)
-        if rendered and subvoxel is not None:
-            s = subvoxel.rendered(s, np.broadcast_to(factor, s.shape))
         return np.concatenate([np.stack(relation.states(s, factor)), start[4:]]
                               ).astype(start.dtype)
 
@@ -121,9 +115,9 @@ def calibrate_start(scene, data, start, relation: StateRelation, sigma=None,
     def misfit(point):
         nonlocal evaluations
         evaluations += 1
-        return chi2(fields_at(*point, rendered=True))
+        return chi2(fields_at(*point))
 
-    before = chi2(start if subvoxel is None else fields_at(0.0, start_factor, rendered=True))
+    before = chi2(start)
     x0 = np.array([0.0, min(max(1.0, low), high)])
     result = minimize(misfit, x0, method="Nelder-Mead",
                       bounds=[np.log(AMPLITUDE_RANGE), (low, high)],

@@ -8,7 +8,7 @@ import numpy as np
 from invflame.experiments.calibration import calibrate_start
 from invflame.experiments.data_start import band_tomography_start
 from invflame.experiments.initialization import ambient, noisy_truth, with_soot_field
-from invflame.experiments.parameters import state_relation, subvoxel_emission
+from invflame.experiments.parameters import state_relation
 from invflame.field import Field
 from invflame.measurement import Measurement
 from invflame.scene import Scene
@@ -37,8 +37,7 @@ def initial_fields(cfg: dict, truth: Field, scene: Scene, measurement: Measureme
         if init["calibrate"]:
             calibration = calibrate_start(scene, measurement.data,
                                           with_soot_field(start, scene.soot_input),
-                                          state_relation(cfg, scene), sigma,
-                                          subvoxel=subvoxel_emission(cfg, scene))
+                                          state_relation(cfg, scene), sigma)
             start = calibration.fields
             if log is not None:
                 log("start calibrated to the spectra: " + ", ".join(

@@ -5,7 +5,6 @@ import pytest
 
 from invflame.experiments.calibration import calibrate_start
 from invflame.representations.state_relation import StateRelation
-from invflame.representations.subvoxel import SubvoxelEmission
 
 AIR = [300.0, 0.0, 0.0, 0.0]
 
@@ -47,23 +46,3 @@ def test_masked_values_count_for_nothing(tiny_scene64, relation, progress):
     result = calibrate_start(tiny_scene64, data, np.stack(relation.states(progress)), relation,
                              sigma=sigma, tolerance=1e-3)
     assert result.factor == pytest.approx(1.3, rel=0.02)
-
-
-def test_with_a_subvoxel_model_the_numbers_of_data_it_rendered_are_found(tiny_scene64, relation,
-                                                                         progress):
-    """Data rendered through the sub-voxel model: calibrating through it finds the amplitude
-    and factor and returns the mean states; calibrating without it asks for more gas."""
-    model = SubvoxelEmission(relation, 1.0)
-    s = np.minimum(1.3 * progress, relation.progress_max)
-    data = tiny_scene64.simulate(np.stack(relation.states(model.rendered(
-        s, np.full_like(s, 1.2)), 1.2)))
-    start = np.stack(relation.states(progress, 1.0))
-    result = calibrate_start(tiny_scene64, data, start, relation, sigma=1e-3, tolerance=1e-3,
-                             subvoxel=model)
-    assert result.amplitude == pytest.approx(1.3, rel=0.02)
-    assert result.factor == pytest.approx(1.2, rel=0.02)
-    np.testing.assert_allclose(result.fields, np.stack(relation.states(
-        np.minimum(result.amplitude * progress, relation.progress_max), result.factor)),
-        rtol=1e-4, atol=1e-12)  # the mean states, in the start's float32
-    plain = calibrate_start(tiny_scene64, data, start, relation, sigma=1e-3, tolerance=1e-3)
-    assert plain.chi2_after > 10 * result.chi2_after
