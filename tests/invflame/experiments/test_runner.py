@@ -301,11 +301,12 @@ def test_stop_chi2_ends_the_solve_at_the_first_iterate_within_the_level(tmp_path
     free = runner.run_experiment(tiny(), tmp_path / "free", progress=False)
     chi2 = np.loadtxt(tmp_path / "free" / "history.csv", delimiter=",", skiprows=1,
                       usecols=2) / np.load(tmp_path / "free" / "data.npz")["measured"].size
-    assert free["iterations"] == 6 and chi2[3] < chi2[:3].min(), chi2
-    level = 0.5 * (chi2[3] + chi2[:3].min())  # iteration 3 is the first at or below it
+    assert free["iterations"] == 6
+    first = next(k for k in range(1, 6) if chi2[k] < chi2[:k].min())  # a new lowest misfit
+    level = 0.5 * (chi2[first] + chi2[:first].min())  # the first iterate at or below it
     summary = runner.run_experiment(tiny(solver={**TINY["solver"], "stop_chi2": level}),
                                     tmp_path / "stopped", progress=False)
-    assert summary["iterations"] == 3 and summary["converged"]
+    assert summary["iterations"] == first and summary["converged"]
     assert summary["stop_reason"].startswith("misfit_target:")
     with pytest.raises(config.ConfigError, match="'solver.stop_chi2' = 2.0 stops at a noise-"):
         tiny(solver={**TINY["solver"], "stop_chi2": 2.0}, regularizer={"scaling": "paper"})
