@@ -29,36 +29,7 @@ import numpy as np
 from invflame.experiments import config, reproduce, runner
 from invflame.experiments.parameters import state_relation
 from invflame.geometry import VoxelGrid
-
-C2 = 1.4387769  # second radiation constant, cm K
-NU0 = 690.0  # cm-1
-
-
-def proxy(relation, s, h):
-    """Thin-gas emission per unit volume, up to a constant: X_CO2 · B_ν0(T) / T."""
-    t, co2, _, _ = relation.states(s, h)
-    return co2 / np.expm1(C2 * NU0 / t) / t
-
-
-def equivalent_progress(relation, target, h, n_points: int = 2049):
-    """The progress whose state at factor ``h`` emits ``target`` (bisection on the monotone
-    proxy, vectorized)."""
-    lo = np.zeros_like(target)
-    hi = np.full_like(target, relation.progress_max)
-    for _ in range(40):
-        mid = 0.5 * (lo + hi)
-        above = proxy(relation, mid, h) > target
-        hi = np.where(above, mid, hi)
-        lo = np.where(above, lo, mid)
-    return 0.5 * (lo + hi)
-
-
-def two_state_target(relation, s, h, c):
-    """Mean proxy of the two states ``s ± a`` with ``a = c·|∇s|`` (gradient per voxel)."""
-    gradient = np.sqrt(sum(np.gradient(s, axis=k) ** 2 for k in range(3)))
-    a = np.minimum(c * gradient, np.minimum(s, relation.progress_max - s))
-    return 0.5 * (proxy(relation, s - a, h) + proxy(relation, s + a, h))
-
+from invflame.representations.subvoxel import SubvoxelEmission
 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(prog="subgrid_emission")
@@ -78,27 +49,26 @@ if __name__ == "__main__":
     coarse = native.resample(scene.grid).values
     s_bar, h_bar = relation.invert(coarse)
     s_fine, h_fine = relation.invert(fine.values)
-    children = proxy(relation, s_fine, h_fine).reshape(n[0], 2, n[1], 2, n[2], 2)
-    target = children.mean(axis=(1, 3, 5))
+    proxy = SubvoxelEmission(relation, 1.0)  # its emission and inverse serve any spread
+    target = proxy.emission(s_fine, h_fine).reshape(n[0], 2, n[1], 2, n[2], 2).mean(
+        axis=(1, 3, 5))
 
-    def row(label, s):
-        fields = np.stack(relation.states(s, h_bar))
-        fields = np.where(s_bar > 1e-3, fields, coarse)  # air keeps its averaged state
+    def report(label, fields):
         prediction = scene.simulate(fields)
         chi2 = float(np.mean(((prediction - measurement.data) / sigma) ** 2))
         print(f"| {label} | {chi2:.4g} | {prediction.sum() / measurement.data.sum():.4f} |",
               flush=True)
 
+    def row(label, s):
+        fields = np.stack(relation.states(s, h_bar))
+        report(label, np.where(s_bar > 1e-3, fields, coarse))  # air keeps its averaged state
+
     print(f"{args.truth} ({args.method}'s quick problem, grid {n}): χ²/M of the data against")
     print("| model of the truth | χ²/M | radiance / data's |")
     print("|---|---:|---:|")
-    prediction = scene.simulate(coarse)
-    print(f"| averaged onto the grid | "
-          f"{np.mean(((prediction - measurement.data) / sigma) ** 2):.4g} | "
-          f"{prediction.sum() / measurement.data.sum():.4f} |", flush=True)
+    report("averaged onto the grid", coarse)
     row("its state relation (s̄, h̄)", s_bar)
-    row("emission-equivalent progress of the 8 children", equivalent_progress(
-        relation, target, h_bar))
+    row("emission-equivalent progress of the 8 children",
+        proxy.equivalent_progress(target, h_bar))
     for c in args.spread:
-        row(f"two states s̄ ± {c:g}·|∇s̄|", equivalent_progress(
-            relation, two_state_target(relation, s_bar, h_bar, c), h_bar))
+        row(f"two states s̄ ± {c:g}·|∇s̄|", SubvoxelEmission(relation, c).rendered(s_bar, h_bar))

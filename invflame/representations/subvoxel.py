@@ -29,9 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from invflame.representations.state_relation import StateRelation
-
-SECOND_RADIATION_CONSTANT = 1.4387769
-"""c₂ = hc/k in cm·K (CODATA 2018)."""
+from operators.rte.planck import C2
 
 PROXY_WAVENUMBER = 690.0
 """Wavenumber (cm⁻¹) of the emission proxy: the centre of the CO₂ ν₂ band's wings that the
@@ -63,7 +61,7 @@ class SubvoxelEmission:
         r"""The thin-gas emission proxy :math:`X_\text{CO2} B_\nu(T)/T` at
         :data:`PROXY_WAVENUMBER` in the array module ``xp``, up to a constant (1/K)."""
         t, co2, _, _ = self.relation.states(s, h)
-        return co2 / (t * xp.expm1(SECOND_RADIATION_CONSTANT * PROXY_WAVENUMBER / t))
+        return co2 / (t * xp.expm1(C2 * PROXY_WAVENUMBER / t))
 
     def rendered(self, s, h, xp=np):
         """The emission-equivalent progress of voxels ``s`` (mean progress, shape
@@ -74,16 +72,17 @@ class SubvoxelEmission:
         a = xp.minimum(self.spread * gradient, xp.minimum(s, s_max - s))
         target = 0.5 * (self.emission(s - a, h, xp) + self.emission(s + a, h, xp))
         if xp is np:
-            return self._bisect(target, h, np)
+            return self.equivalent_progress(target, h)
         import jax
 
         stop = jax.lax.stop_gradient
-        s0 = stop(self._bisect(stop(target), stop(h), xp))
+        s0 = stop(self.equivalent_progress(stop(target), stop(h), xp))
         value, slope = jax.jvp(lambda u: self.emission(u, h, xp), (s0,), (xp.ones_like(s0),))
         return s0 - (value - target) / slope
 
-    def _bisect(self, target, h, xp):
-        """The progress in [0, s_max] whose emission at ``h`` meets ``target``."""
+    def equivalent_progress(self, target, h, xp=np):
+        """The progress in [0, s_max] whose :meth:`emission` at factors ``h`` meets ``target``
+        (bisection on the increasing proxy, in the array module ``xp``)."""
         low = xp.zeros_like(target)
         high = xp.full_like(target, self.relation.progress_max)
         for _ in range(BISECTIONS):
