@@ -8,10 +8,19 @@ it changes nothing in the process: it does not import torch (only building a
 64-bit mode; an operator of dtype float64 computes in float64 inside :func:`precision` only.
 """
 
-from operators.adapters import JaxOperator, TorchOperator, aslinearoperator
-from operators.algebra import linearize_together  # also registers what ``A @ B`` etc. build
+from operators.adapters import aslinearoperator
+from operators.algebra import linearize_together
 from operators.averaging import RowMean
-from operators.base import Identity, Jacobian, JaxMap, LinearOperator, Operator, precision
+from operators.base import (
+    Identity,
+    Jacobian,
+    JaxMap,
+    JaxOperator,
+    LinearOperator,
+    Operator,
+    TorchOperator,
+    precision,
+)
 from operators.checks import (
     dottest,
     gradient_taylor_test,

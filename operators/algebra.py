@@ -1,115 +1,28 @@
-r"""The chain-rule algebra of operators: ``A @ B``, ``A + B``, ``c * A`` and their kin.
-
-:class:`Composition`, :class:`Sum` and :class:`Scaled` are what the operators of
-:class:`~operators.base.Operator` (``@``, ``+``, ``-``, ``*``, unary ``-``, ``**``) build;
-:class:`_Combination` is the common ground of every operator assembled from parts applied to
-one input, the stacks of :mod:`operators.combinators` included. A combination linearizes each
-part once per point: the Jacobian of ``A + B`` at ``x`` is the sum of the parts' Jacobians at
-``x``, built once, and so on for every combinator; it is linear when all its parts are.
-
-This module imports :mod:`operators.base`, never the other way round: its classes register
-themselves with :func:`operators.base.register`, through which the base class's methods build
-them and ``operators.base.Composition`` (and so on) stays importable.
+r"""Chains of compositions that end in the same factors, linearized with those factors once.
 
 :func:`linearize_together` linearizes several chains of compositions that end in the same
-factors (a data map and a regularizer after one reparameterization) with those factors once.
+factors (a data map and a regularizer after one reparameterization) with those factors once;
+:func:`_common_factor` finds the factors, for it and for the stacks of
+:mod:`operators.combinators`. The combinations themselves (:class:`~operators.base.Composition`,
+:class:`~operators.base.Sum`, :class:`~operators.base.Scaled`) are defined in
+:mod:`operators.base`, whose operators' ``@``, ``+`` and ``*`` build them; this module imports
+that one.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 
-import jax.numpy as jnp
 import numpy as np
 
-from operators.base import Jacobian, JaxMap, LinearOperator, Operator, _size, register
-
-
-def _jacobian_from(op: Operator, x, value, derivative: LinearOperator) -> Jacobian:
-    """The Jacobian of ``op`` at ``x`` applied through an already assembled linear map."""
-    return Jacobian(op, x, value, derivative=derivative)
-
-
-def _push(op: Operator, x, v):
-    """:math:`J_{op}(x) v` (``x`` unused, and may be None, when ``op`` is linear)."""
-    return op(v) if op.linear else op.jvp(x, v)
-
-
-def _pull(op: Operator, x, w):
-    r""":math:`J_{op}(x)^\mathsf{T} w` (``x`` unused, and may be None, when ``op`` is linear)."""
-    return op.adjoint(w) if op.linear else op.vjp(x, w)
-
-
-@register
-class Composition(Operator):
-    r"""``outer @ inner``: :math:`x \mapsto \text{outer}(\text{inner}(x))`, chain rule.
-
-    The inner output is reshaped to the outer input when the two shapes differ in layout but
-    not in size (checked here, once).
-    """
-
-    def __init__(self, outer: Operator, inner: Operator):
-        if _size(outer.dims) != _size(inner.dimsd):
-            raise ValueError(
-                f"cannot compose {outer.name} (input {outer.dims}) after {inner.name} "
-                f"(output {inner.dimsd}): sizes differ"
-            )
-        dtype = np.result_type(outer.dtype, inner.dtype)
-        super().__init__(inner.dims, outer.dimsd, dtype=dtype,
-                         name=f"({outer.name} @ {inner.name})")
-        self.outer, self.inner = outer, inner
-        self.parts = (outer, inner)
-
-    def _mid(self, y):
-        return np.reshape(y, self.outer.dims)
-
-    def jax_map(self) -> JaxMap | None:
-        """The two parts' maps composed, when both have one; the outer part's domain is
-        checked at the inner part's value, computed on the host by the inner operator (cheap
-        for a diagonal before the emission map, as a voxel problem has it)."""
-        outer, inner = self.outer.jax_map(), self.inner.jax_map()
-        if outer is None or inner is None:
-            return None
-        mid = self.outer.dims
-
-        def function(args, x):
-            return outer.function(args[0], jnp.reshape(inner.function(args[1], x), mid))
-
-        def check(x):
-            if inner.check is not None:
-                inner.check(x)
-            if outer.check is not None:
-                outer.check(self._mid(self.inner(x)))
-
-        checked = inner.check is not None or outer.check is not None
-        return JaxMap(function, (outer.args, inner.args), check if checked else None)
-
-    def _forward(self, x):
-        return self.outer(self._mid(self.inner(x)))
-
-    def _inner_value(self, x):
-        return None if self.outer.linear else self._mid(self.inner(x))
-
-    def _jvp(self, x, v):
-        return _push(self.outer, self._inner_value(x), self._mid(_push(self.inner, x, v)))
-
-    def _vjp(self, x, w):
-        inner_w = np.reshape(_pull(self.outer, self._inner_value(x), w), self.inner.dimsd)
-        return _pull(self.inner, x, inner_w)
-
-    def linearize(self, x) -> Jacobian:
-        r"""Both parts linearized once: :math:`J = J_\text{outer}(\text{inner}(x))\,
-        J_\text{inner}(x)`."""
-        x = self._as_input(x)
-        return _linearize_after(self, x, self.outer, self.inner.linearize(x))[1]
-
-
-def _linearize_after(op: Operator, x, outer: Operator, j_inner: Jacobian):
-    """``(J_outer, J_op)`` at ``x`` for ``op`` = ``outer`` after an inner map whose Jacobian
-    at ``x`` (with its value) is ``j_inner``: the outer linearized at the inner's value."""
-    j_outer = outer.linearize(np.reshape(j_inner.value, outer.dims))
-    return j_outer, _jacobian_from(op, x, j_outer.value,
-                                   _linear_if_possible(Composition(j_outer, j_inner)))
+from operators.base import (
+    Composition,
+    Jacobian,
+    Operator,
+    Scaled,
+    _linearize_after,
+    _LinearView,
+)
 
 
 def _factors(op: Operator) -> list[Operator]:
@@ -221,125 +134,3 @@ def linearize_together(ops: Sequence[Operator], x):
                                        if w is not None), ops[0].dims)
 
     return list(jacobians), pull
-
-
-class _Combination(Operator):
-    """An operator assembled from ``parts`` applied to (pieces of) one input.
-
-    Subclasses say how the input is handed to the parts (:meth:`_inputs`), how the parts'
-    outputs are assembled (:meth:`_assemble`) and the adjoints of both (:meth:`_cotangents`,
-    :meth:`_gather`); value, Jacobian products and the once-per-point linearization follow.
-    """
-
-    parts: tuple[Operator, ...]
-
-    def _rebuild(self, parts: Sequence[Operator]) -> Operator:
-        """The same combination of other operators (e.g. of the parts' Jacobians)."""
-        raise NotImplementedError
-
-    def _inputs(self, x) -> list:
-        return [np.reshape(x, p.dims) for p in self.parts]
-
-    def _gather(self, grads) -> np.ndarray:
-        return sum(np.reshape(g, self.dims) for g in grads)
-
-    def _assemble(self, outputs) -> np.ndarray:
-        raise NotImplementedError
-
-    def _cotangents(self, w) -> list:
-        raise NotImplementedError
-
-    def _forward(self, x):
-        return self._assemble([p(xi) for p, xi in zip(self.parts, self._inputs(x), strict=True)])
-
-    def _jvp(self, x, v):
-        return self._assemble([_push(p, xi, vi) for p, xi, vi in
-                               zip(self.parts, self._inputs(x), self._inputs(v), strict=True)])
-
-    def _vjp(self, x, w):
-        xs = [None] * len(self.parts) if x is None else self._inputs(x)
-        return self._gather([_pull(p, xi, wi) for p, xi, wi in
-                             zip(self.parts, xs, self._cotangents(w), strict=True)])
-
-    def linearize(self, x) -> Jacobian:
-        """Each part linearized once at its input; the Jacobian is the same combination of
-        the parts' Jacobians."""
-        x = self._as_input(x)
-        jacobians = [p.linearize(xi) for p, xi in zip(self.parts, self._inputs(x), strict=True)]
-        value = self._assemble([j.value for j in jacobians])
-        return _jacobian_from(self, x, value, _linear_if_possible(self._rebuild(jacobians)))
-
-
-@register
-class Sum(_Combination):
-    """``A + B + ...`` of operators with inputs and outputs of the same sizes (the shapes of
-    the first)."""
-
-    def __init__(self, ops: Sequence[Operator]):
-        ops = list(ops)
-        first = ops[0]
-        for op in ops[1:]:
-            if _size(op.dims) != _size(first.dims) or _size(op.dimsd) != _size(first.dimsd):
-                raise ValueError(
-                    f"cannot add {first.name} ({first.dims} -> {first.dimsd}) and {op.name} "
-                    f"({op.dims} -> {op.dimsd}): sizes differ"
-                )
-        super().__init__(first.dims, first.dimsd, dtype=np.result_type(*[o.dtype for o in ops]),
-                         name="(" + " + ".join(o.name for o in ops) + ")")
-        self.parts = tuple(ops)
-
-    def _rebuild(self, parts):
-        return Sum(parts)
-
-    def _assemble(self, outputs):
-        return sum(np.reshape(y, self.dimsd) for y in outputs)
-
-    def _cotangents(self, w):
-        return [np.reshape(w, p.dimsd) for p in self.parts]
-
-
-@register
-class Scaled(_Combination):
-    """``c * A`` for a real scalar ``c``."""
-
-    def __init__(self, op: Operator, scale: float):
-        super().__init__(op.dims, op.dimsd, dtype=op.dtype, name=f"{scale:g}*{op.name}")
-        self.scale = float(scale)
-        self.parts = (op,)
-
-    def _rebuild(self, parts):
-        return Scaled(parts[0], self.scale)
-
-    def _assemble(self, outputs):
-        return self.scale * outputs[0]
-
-    def _cotangents(self, w):
-        return [self.scale * w]
-
-
-class _LinearView(LinearOperator):
-    """A combination of linear operators seen as one :class:`LinearOperator`.
-
-    Attributes
-    ----------
-    combination : Operator
-        The combination itself (e.g. a :class:`~operators.combinators.VStack`, for its
-        ``split``/``join``).
-    """
-
-    def __init__(self, op: Operator):
-        super().__init__(op.dims, op.dimsd, dtype=op.dtype, name=op.name)
-        self.combination = op
-
-    def _forward(self, x):
-        return self.combination._forward(x)
-
-    def _adjoint(self, y):
-        return self.combination._vjp(None, y)
-
-
-@register
-def _linear_if_possible(op: Operator) -> Operator:
-    """A combination (``op.parts``: the operators it combines) as a linear operator when every
-    part is linear, else unchanged."""
-    return _LinearView(op) if all(p.linear for p in op.parts) else op

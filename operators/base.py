@@ -1,91 +1,52 @@
-r"""Operators between array shapes, possibly nonlinear, with the chain rule built in.
+r"""Operators and their algebra: every class that a method of an operator builds.
 
-An :class:`Operator` :math:`F: \mathbb{R}^{\text{dims}} \to \mathbb{R}^{\text{dimsd}}` evaluates
-``F(x)``, its Jacobian-vector product ``F.jvp(x, v)`` :math:`= J_F(x) v`, its vector-Jacobian
-product ``F.vjp(x, w)`` :math:`= J_F(x)^\mathsf{T} w`, and ``F.linearize(x)``, the Jacobian at
-``x`` as a matrix-free :class:`LinearOperator` that also carries the value ``F(x)``.
+An :class:`Operator` is the protocol of :mod:`operators.protocol` (``F(x)``, ``F.jvp(x, v)``,
+``F.vjp(x, w)``, written as ``_forward``, ``_jvp`` and ``_vjp``, or ``_forward`` and
+``_adjoint`` for a :class:`LinearOperator`) with the methods that return operators:
+``F.linearize(x)``, the Jacobian at ``x`` as a matrix-free :class:`LinearOperator` that also
+carries ``F(x)``; ``A.H``, ``A.T``; and the algebra, which follows the chain rule: ``A @ B``
+(``B`` applied first), ``A + B``, ``A - B``, ``c * A``, ``-A``, ``A ** p`` and the stacks of
+:mod:`operators.combinators`. Each returns an operator, linear when all its parts are, that
+linearizes each part once per point.
 
-There is one way to write an operator, on arrays already shaped ``dims`` / ``dimsd``:
-
-- a nonlinear one implements ``_forward(x)``, ``_jvp(x, v)`` and ``_vjp(x, w)`` (and may
-  override ``linearize`` to share work between the value and the derivatives);
-- a linear one (:class:`LinearOperator`) implements ``_forward(x)`` and ``_adjoint(y)``; the
-  base class derives the Jacobian products and pylops' flat ``_matvec`` / ``_rmatvec`` from
-  them, so pylops solvers, :func:`pylops.utils.dottest` and pyproximal take it unchanged.
-  ``A.H`` is the adjoint as an operator and ``A.adjoint(y)`` applies it.
-
-The algebra follows the chain rule: ``A @ B`` (composition, ``B`` applied first), ``A + B``,
-``A - B``, ``c * A``, ``-A``, ``A ** p``, ``A.T``, and the stacks :func:`~operators.vstack` and
-:func:`~operators.block_diag` (:mod:`operators.combinators`); every one returns an operator,
-linear when all its parts are, and linearizes each part once per point (:mod:`operators.algebra`).
-
-**Where the pieces live.** This module holds the base classes and the operators their own
-methods return: :class:`Jacobian`, :class:`Adjoint` and :class:`Identity`. The combinations
-(:mod:`operators.algebra`) and the wrappers of pylops operators and of JAX or torch functions
-(:mod:`operators.adapters`) import this module and never the reverse: they :func:`register`
-themselves here, and the methods build them through that registry, which also keeps them
-importable from here (``operators.base.Composition``).
-
-**Shapes are checked.** An input must have the operator's shape (``dims`` for ``x`` and ``v``,
-``dimsd`` for ``w``); a linear operator also takes the flat vector of as many elements, the
-convention of pylops' ``matvec``. Anything else raises a ``ValueError`` naming the operator, the
-expected and the given shape; so does an implementation whose result has the wrong shape.
-
-**Precision.** An operator of dtype float64 evaluates (value, Jacobian products, adjoint and
-``linearize``, a subclass's own included) inside :func:`~operators.jax_precision.precision`.
+**Why these classes share a module.** A method builds only the classes its module sees, and what
+the methods of an operator build are operators: :class:`Jacobian`, :class:`Adjoint`,
+:class:`Identity` (``A ** 0``), :class:`Composition`, :class:`Sum`, :class:`Scaled`, the wrapper
+of a pylops operator (``A @ pylops_op``), :class:`JaxOperator` and :class:`TorchOperator`
+(``Operator.from_jax`` / ``from_torch``). This module defines them all, with what builds
+operators; what they compute on arrays is below it, in :mod:`operators.protocol` and
+:mod:`operators.rules`. Imports run one way, from those to this module to the rest of
+:mod:`operators`, and nothing registers itself anywhere.
 """
 
 from __future__ import annotations
 
-import functools
 import numbers
-import types
+from collections.abc import Sequence
 
 import numpy as np
 
 from operators.jax_map import JaxMap
-from operators.jax_precision import precision
+from operators.jax_operator import JaxFunction
+from operators.jax_precision import precision as precision  # importable from here, as before
+from operators.protocol import LinearOperatorProtocol, OperatorProtocol
 from operators.pylops_import import pylops
-
-#: What :func:`register` received, by name.
-_registered = types.SimpleNamespace()
-
-
-def register(obj):
-    """Make ``obj``, a class or function of a module that imports this one, available to the
-    methods of :class:`Operator` and importable from here as ``operators.base.<name>``.
-
-    Parameters
-    ----------
-    obj : type or callable
-        Registered under its ``__name__``; returned unchanged (use as a decorator).
-    """
-    setattr(_registered, obj.__name__, obj)
-    return obj
+from operators.rules import (
+    CombinationRule,
+    CompositionRule,
+    FunctionRule,
+    PylopsRule,
+    ScaleRule,
+    SumRule,
+)
 
 
-def __getattr__(name):
-    """A registered name (:func:`register`), as an attribute of this module."""
-    try:
-        return getattr(_registered, name)
-    except AttributeError:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
-
-
-def _shape(dims) -> tuple[int, ...]:
-    return (int(dims),) if np.isscalar(dims) else tuple(int(d) for d in dims)
-
-
-def _size(shape) -> int:
-    return int(np.prod(shape, dtype=np.int64))
-
-
-class Operator:
+class Operator(OperatorProtocol):
     """A differentiable map from arrays of shape ``dims`` to arrays of shape ``dimsd``.
 
     Subclasses implement ``_forward(x)``, ``_jvp(x, v)`` and ``_vjp(x, w)`` on arrays already
-    shaped ``dims`` / ``dimsd``; they may override ``linearize`` to share work between the
-    value and the derivatives.
+    shaped ``dims`` / ``dimsd`` (:class:`~operators.protocol.OperatorProtocol`); they may
+    override ``linearize`` to share work between the value and the derivatives.
 
     Parameters
     ----------
@@ -99,109 +60,26 @@ class Operator:
         Label used in error messages and reprs.
     """
 
-    linear = False
-
-    def __init_subclass__(cls, **kwargs):
-        """A subclass's own ``linearize`` runs inside :func:`precision` too."""
-        super().__init_subclass__(**kwargs)
-        if "linearize" in vars(cls):
-            own = vars(cls)["linearize"]
-
-            @functools.wraps(own)
-            def linearize(self, x):
-                with precision(self.dtype):
-                    return own(self, x)
-
-            cls.linearize = linearize
-
-    def __init__(self, dims, dimsd, dtype=np.float64, name: str | None = None):
-        self.dims = _shape(dims)
-        self.dimsd = _shape(dimsd)
-        self.dtype = np.dtype(dtype)
-        self.name = name or type(self).__name__
-
-    # -- shapes -----------------------------------------------------------------------------
-    def _checked(self, x, shape: tuple[int, ...], what: str) -> np.ndarray:
-        """``x`` as an array of ``shape``; flat accepted for linear operators (pylops)."""
-        x = np.asarray(x)
-        if x.shape == shape:
-            return x
-        if self.linear and x.ndim == 1 and x.size == _size(shape):
-            return x.reshape(shape)
-        flat = f" (or flat, {_size(shape)} elements)" if self.linear else ""
-        raise ValueError(f"{self.name}: {what} expected shape {shape}{flat}, got shape "
-                         f"{x.shape}; reshape or transpose it to {shape}")
-
-    def _as_input(self, x, what: str = "x") -> np.ndarray:
-        return self._checked(x, self.dims, what)
-
-    def _as_output(self, w, what: str = "w") -> np.ndarray:
-        return self._checked(w, self.dimsd, what)
-
-    def _result(self, y, shape: tuple[int, ...], what: str) -> np.ndarray:
-        y = np.asarray(y)
-        if y.shape != shape:
-            raise ValueError(f"{self.name}: {what} returned shape {y.shape}, but the operator "
-                             f"declares {shape}; fix the function or the declared shape")
-        return y
-
-    # -- evaluation -------------------------------------------------------------------------
-    def __call__(self, x) -> np.ndarray:
-        """Evaluate ``F(x)``; ``x`` shaped ``dims``, returns shape ``dimsd``."""
-        x = self._as_input(x)
-        with precision(self.dtype):
-            return self._result(self._forward(x), self.dimsd, "forward")
-
-    def jvp(self, x, v) -> np.ndarray:
-        r"""Jacobian-vector product :math:`J_F(x)\,v`, shape ``dimsd``."""
-        x, v = self._as_input(x), self._as_input(v, "v")
-        with precision(self.dtype):
-            return self._result(self._jvp(x, v), self.dimsd, "jvp")
-
-    def vjp(self, x, w) -> np.ndarray:
-        r"""Vector-Jacobian product :math:`J_F(x)^\mathsf{T} w`, shape ``dims``."""
-        x, w = self._as_input(x), self._as_output(w)
-        with precision(self.dtype):
-            return self._result(self._vjp(x, w), self.dims, "vjp")
-
     def linearize(self, x) -> Jacobian:
         """The Jacobian at ``x`` as a linear operator; ``.value`` holds ``F(x)``."""
         x = self._as_input(x)
         return Jacobian(self, x, self(x))
 
-    def jax_map(self) -> JaxMap | None:
-        """This operator as a function JAX can trace (:class:`JaxMap`), or None (the default)
-        for an operator that has none: programs that need one then use its NumPy methods.
-        Its arrays are placed on JAX's device at every call; call it once per program."""
-        return None
-
-    def _forward(self, x):
-        raise NotImplementedError(f"{self.name} does not implement _forward")
-
-    def _jvp(self, x, v):
-        raise NotImplementedError(f"{self.name} does not implement _jvp")
-
-    def _vjp(self, x, w):
-        raise NotImplementedError(f"{self.name} does not implement _vjp")
-
-    # -- construction from frameworks ------------------------------------------------------
     @staticmethod
     def from_jax(fun, dims, dimsd, dtype=np.float64, name=None) -> Operator:
-        """Wrap a JAX function; see :class:`~operators.adapters.JaxOperator`."""
-        return _registered.JaxOperator(fun, dims, dimsd, dtype=dtype, name=name)
+        """Wrap a JAX function; see :class:`JaxOperator`."""
+        return JaxOperator(fun, dims, dimsd, dtype=dtype, name=name)
 
     @staticmethod
     def from_torch(fun, dims, dimsd, dtype=np.float64, device=None, name=None) -> Operator:
-        """Wrap a torch function; see :class:`~operators.adapters.TorchOperator`."""
-        return _registered.TorchOperator(fun, dims, dimsd, dtype=dtype, device=device,
-                                         name=name)
+        """Wrap a torch function; see :class:`TorchOperator`."""
+        return TorchOperator(fun, dims, dimsd, dtype=dtype, device=device, name=name)
 
-    # -- algebra ----------------------------------------------------------------------------
     def __matmul__(self, other):
         if isinstance(other, pylops.LinearOperator) and not isinstance(other, Operator):
-            other = _registered.aslinearoperator(other)
+            other = _PylopsWrapper(pylops.aslinearoperator(other))
         if isinstance(other, Operator):
-            return _registered._linear_if_possible(_registered.Composition(self, other))
+            return _linear_if_possible(Composition(self, other))
         if self.linear:
             return pylops.LinearOperator.dot(self, other)
         raise TypeError(
@@ -212,7 +90,7 @@ class Operator:
     def __add__(self, other):
         if not isinstance(other, Operator):
             return NotImplemented
-        return _registered._linear_if_possible(_registered.Sum([self, other]))
+        return _linear_if_possible(Sum([self, other]))
 
     def __sub__(self, other):
         if not isinstance(other, Operator):
@@ -224,7 +102,7 @@ class Operator:
 
     def __mul__(self, other):
         if isinstance(other, numbers.Number):
-            return _registered._linear_if_possible(_registered.Scaled(self, other))
+            return _linear_if_possible(Scaled(self, other))
         if self.linear and not isinstance(other, Operator):
             return pylops.LinearOperator.dot(self, other)
         return NotImplemented
@@ -246,11 +124,8 @@ class Operator:
             result = result @ self
         return result
 
-    def __repr__(self) -> str:
-        return f"<{self.name}: {self.dims} -> {self.dimsd}, {self.dtype}>"
 
-
-class LinearOperator(Operator, pylops.LinearOperator):
+class LinearOperator(Operator, LinearOperatorProtocol):
     r"""A linear :class:`Operator` that is also a :class:`pylops.LinearOperator`.
 
     Subclasses implement ``_forward(x)`` on arrays shaped ``dims`` and ``_adjoint(y)`` on arrays
@@ -259,33 +134,10 @@ class LinearOperator(Operator, pylops.LinearOperator):
     ``matvec``/``rmatvec`` all derive from those two methods.
     """
 
-    linear = True
-
-    def __init_subclass__(cls, **kwargs):
-        super().__init_subclass__(**kwargs)
-        flat = [m for m in ("_matvec", "_rmatvec") if m in vars(cls)]
-        if flat:
-            raise TypeError(f"{cls.__name__} defines {' and '.join(flat)}: a LinearOperator "
-                            "implements _forward(x) and _adjoint(y) on shaped arrays, and the "
-                            "base class derives pylops' flat methods from them")
-
-    def __init__(self, dims, dimsd, dtype=np.float64, name: str | None = None):
-        Operator.__init__(self, dims, dimsd, dtype=dtype, name=name)
-        pylops.LinearOperator.__init__(
-            self, dtype=self.dtype, dims=self.dims, dimsd=self.dimsd, name=self.name
-        )
-
-    def _adjoint(self, y):
-        raise NotImplementedError(f"{self.name} does not implement _adjoint")
-
     def adjoint(self, y=None):
         r""":math:`A^\mathsf{H} y` (``y`` shaped ``dimsd``), or the adjoint operator ``A.H``
         when ``y`` is omitted (as pylops' ``adjoint()``)."""
-        if y is None:
-            return Adjoint(self)
-        y = self._as_output(y, "y")
-        with precision(self.dtype):
-            return self._result(self._adjoint(y), self.dims, "adjoint")
+        return Adjoint(self) if y is None else super().adjoint(y)
 
     H = property(adjoint)
 
@@ -298,30 +150,10 @@ class LinearOperator(Operator, pylops.LinearOperator):
 
     T = property(transpose)
 
-    def jvp(self, x, v) -> np.ndarray:
-        """The operator applied to ``v`` (``x`` is ignored: the Jacobian is the operator)."""
-        return self(v)
-
-    def vjp(self, x, w) -> np.ndarray:
-        """The adjoint applied to ``w`` (``x`` is ignored: the Jacobian is the operator)."""
-        return self.adjoint(w)
-
-    def _jvp(self, x, v):
-        return self._forward(v)
-
-    def _vjp(self, x, w):
-        return self._adjoint(w)
-
     def linearize(self, x) -> Jacobian:
         """The operator itself as its Jacobian at ``x``, with ``.value`` :math:`= A x`."""
         x = self._as_input(x)
         return Jacobian(self, x, self(x), derivative=self)
-
-    def _matvec(self, x):
-        return self(np.reshape(x, self.dims)).ravel()
-
-    def _rmatvec(self, y):
-        return self.adjoint(np.reshape(y, self.dimsd)).ravel()
 
 
 class Identity(LinearOperator):
@@ -398,3 +230,155 @@ class Jacobian(LinearOperator):
 
     def _adjoint(self, w):
         return np.asarray(self._apply_vjp(w))
+
+
+class Composition(CompositionRule, Operator):
+    r"""``outer @ inner``: :math:`x \mapsto \text{outer}(\text{inner}(x))`, chain rule
+    (:class:`~operators.rules.CompositionRule`)."""
+
+    def linearize(self, x) -> Jacobian:
+        r"""Both parts linearized once: :math:`J = J_\text{outer}(\text{inner}(x))\,
+        J_\text{inner}(x)`."""
+        x = self._as_input(x)
+        return _linearize_after(self, x, self.outer, self.inner.linearize(x))[1]
+
+
+def _linearize_after(op: Operator, x, outer: Operator, j_inner: Jacobian):
+    """``(J_outer, J_op)`` at ``x`` for ``op`` = ``outer`` after an inner map whose Jacobian
+    at ``x`` (with its value) is ``j_inner``: the outer linearized at the inner's value."""
+    j_outer = outer.linearize(np.reshape(j_inner.value, outer.dims))
+    return j_outer, Jacobian(op, x, j_outer.value,
+                             derivative=_linear_if_possible(Composition(j_outer, j_inner)))
+
+
+class _Combination(CombinationRule, Operator):
+    """An operator assembled from ``parts`` applied to (pieces of) one input
+    (:class:`~operators.rules.CombinationRule`), linearized once per point."""
+
+    def _rebuild(self, parts: Sequence[Operator]) -> Operator:
+        """The same combination of other operators (e.g. of the parts' Jacobians)."""
+        raise NotImplementedError
+
+    def linearize(self, x) -> Jacobian:
+        """Each part linearized once at its input; the Jacobian is the same combination of
+        the parts' Jacobians."""
+        x = self._as_input(x)
+        jacobians = [p.linearize(xi) for p, xi in zip(self.parts, self._inputs(x), strict=True)]
+        value = self._assemble([j.value for j in jacobians])
+        return Jacobian(self, x, value, derivative=_linear_if_possible(self._rebuild(jacobians)))
+
+
+class Sum(SumRule, _Combination):
+    """``A + B + ...`` (:class:`~operators.rules.SumRule`)."""
+
+    def _rebuild(self, parts):
+        return Sum(parts)
+
+
+class Scaled(ScaleRule, _Combination):
+    """``c * A`` (:class:`~operators.rules.ScaleRule`)."""
+
+    def _rebuild(self, parts):
+        return Scaled(parts[0], self.scale)
+
+
+class _LinearView(LinearOperator):
+    """A combination of linear operators seen as one :class:`LinearOperator`.
+
+    Attributes
+    ----------
+    combination : Operator
+        The combination itself (e.g. a :class:`~operators.combinators.VStack`, for its
+        ``split``/``join``).
+    """
+
+    def __init__(self, op: Operator):
+        super().__init__(op.dims, op.dimsd, dtype=op.dtype, name=op.name)
+        self.combination = op
+
+    def _forward(self, x):
+        return self.combination._forward(x)
+
+    def _adjoint(self, y):
+        return self.combination._vjp(None, y)
+
+
+def _linear_if_possible(op: Operator) -> Operator:
+    """A combination (``op.parts``: the operators it combines) as a linear operator when every
+    part is linear, else unchanged."""
+    return _LinearView(op) if all(p.linear for p in op.parts) else op
+
+
+class _PylopsWrapper(PylopsRule, LinearOperator):
+    """A pylops linear operator as ours (:func:`operators.aslinearoperator`, ``A @ op``)."""
+
+
+class _FunctionOperator(FunctionRule, Operator):
+    """An operator whose value and derivatives come from a JAX or torch function
+    (:class:`~operators.rules.FunctionRule`)."""
+
+    def linearize(self, x) -> Jacobian:
+        """One forward pass, keeping the framework's pullback for the vjp."""
+        x = self._as_input(x)
+        value, jvp, vjp = self.function.pullback(x)
+        return Jacobian(self, x, self._result(value, self.dimsd, "forward"), jvp=jvp, vjp=vjp)
+
+
+class JaxOperator(_FunctionOperator):
+    """An :class:`Operator` from a JAX function ``fun(x) -> y``.
+
+    ``jvp`` and ``vjp`` come from :func:`jax.jvp` and :func:`jax.vjp`; all three are jit-compiled
+    once per operator. ``linearize`` runs the forward pass once and keeps JAX's pullback, so a
+    solver's value and gradient cost one forward and one reverse pass. Its :meth:`jax_map` is
+    ``fun`` itself, so that it takes part in compiled programs such as
+    :mod:`solvers.compiled_objective`.
+
+    Parameters
+    ----------
+    fun : callable
+        JAX-traceable function from an array of shape ``dims`` to one of shape ``dimsd``.
+    dims, dimsd : tuple of int
+        Input and output shapes; the function's output shape is checked against ``dimsd``.
+    dtype : numpy dtype, optional
+        Dtype the input is cast to before calling ``fun`` (default float64, computed in JAX's
+        64-bit mode inside :func:`~operators.base.precision`).
+    name : str, optional
+        Label for messages.
+    """
+
+    def __init__(self, fun, dims, dimsd, dtype=np.float64, name=None):
+        super().__init__(JaxFunction(fun, dtype), dims, dimsd, dtype,
+                         name or getattr(fun, "__name__", "jax"))
+        self.fun = fun
+
+    def jax_map(self) -> JaxMap:
+        return JaxMap(lambda _, x: self.fun(x))
+
+
+class TorchOperator(_FunctionOperator):
+    """An :class:`Operator` from a torch function ``fun(x) -> y``.
+
+    ``jvp`` and ``vjp`` come from :func:`torch.func.jvp` and :func:`torch.func.vjp`; torch is
+    imported when the first such operator is built.
+
+    Parameters
+    ----------
+    fun : callable
+        Function from a tensor of shape ``dims`` to one of shape ``dimsd``.
+    dims, dimsd : tuple of int
+        Input and output shapes; the function's output shape is checked against ``dimsd``.
+    dtype : numpy dtype, optional
+        float32 or float64 (default); the input tensor gets the matching torch dtype.
+    device : str or torch.device, optional
+        Where ``fun`` runs (default: torch's default device, the CPU unless
+        :func:`torch.set_default_device` chose another).
+    name : str, optional
+        Label for messages.
+    """
+
+    def __init__(self, fun, dims, dimsd, dtype=np.float64, device=None, name=None):
+        from operators.torch_operator import TorchFunction
+
+        super().__init__(TorchFunction(fun, dtype, device), dims, dimsd, dtype,
+                         name or getattr(fun, "__name__", "torch"))
+        self.device = self.function.device

@@ -1,5 +1,5 @@
 """Stacks of operators on one input (:func:`vstack`) and block-diagonal operators on the parts
-of one input (:func:`block_diag`), with the chain rule of :mod:`operators.algebra`.
+of one input (:func:`block_diag`), with the chain rule of :mod:`operators.rules`.
 
 Each is linear (a :class:`operators.base.LinearOperator`) when all its blocks are, and
 linearizes each block once per point. A stack of linear blocks that end in the same factors
@@ -12,13 +12,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from operators.algebra import (
-    _Combination,
-    _common_factor,
-    _linear_if_possible,
-    _pull_through,
-)
-from operators.base import Operator, _size
+from operators.algebra import _common_factor, _pull_through
+from operators.base import Operator, _Combination, _linear_if_possible
+from operators.protocol import _size
 
 
 def _stacked_shape(shapes: Sequence[tuple[int, ...]]) -> tuple[int, ...]:

@@ -1,4 +1,4 @@
-"""The JAX side of :class:`operators.adapters.JaxOperator`: a JAX function and its derivatives on
+"""The JAX side of :class:`operators.base.JaxOperator`: a JAX function and its derivatives on
 NumPy arrays."""
 
 from __future__ import annotations

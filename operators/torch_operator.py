@@ -1,4 +1,4 @@
-"""The torch side of :class:`operators.adapters.TorchOperator`: a torch function and its
+"""The torch side of :class:`operators.base.TorchOperator`: a torch function and its
 derivatives (:mod:`torch.func`) on NumPy arrays. Importing this module imports torch."""
 
 from __future__ import annotations

@@ -52,7 +52,7 @@ _TYPE, _METADATA, _EXTENSION_WORDS = 1, 3, 4
 _VERSION_BYTES, _TRAITS_BYTES = 24, 32
 _EXECUTE, _METADATA_EXTENSION = 3, 1
 
-_handlers = {}  # the registered handlers, kept alive while XLA may call them
+_handlers = {}  # each target's handler, by name, kept alive while XLA may call it
 
 
 @intrinsic
@@ -80,7 +80,7 @@ def _words(address, n):
 @numba.njit(inline="always")
 def executing(frame):
     """Whether XLA calls the handler to run it (its execute stage). When XLA asks for the
-    handler's metadata instead (at registration), this answers: API version
+    handler's metadata instead (when it becomes a target), this answers: API version
     :data:`API_VERSION`, no traits. At the other stages (instantiate, prepare, initialize) there
     is nothing to do."""
     words = _words(_address(frame), _FRAME_WORDS)
@@ -135,18 +135,19 @@ def result(frame, i, ndim, dtype):
 
 
 def ffi_target(name: str, handler) -> str:
-    """Register ``handler`` (a :func:`numba.cfunc` of :data:`HANDLER`) as the CPU target
-    ``name`` of :func:`jax.ffi.ffi_call`, once per name; returns ``name``.
+    """Make ``handler`` (a :func:`numba.cfunc` of :data:`HANDLER`) the CPU target ``name`` of
+    :func:`jax.ffi.ffi_call` (:func:`jax.ffi.register_ffi_target`), once per name; returns
+    ``name``.
 
     Raises
     ------
     ValueError
-        If another handler was registered under ``name``.
+        If ``name`` is already the target of another handler.
     """
     known = _handlers.get(name)
     if known is None:
         jax.ffi.register_ffi_target(name, jax.ffi.pycapsule(handler.address), platform="cpu")
         _handlers[name] = handler
     elif known is not handler:
-        raise ValueError(f"the FFI target {name!r} is registered with another handler")
+        raise ValueError(f"the FFI target {name!r} is already another handler's")
     return name

@@ -113,3 +113,20 @@ def test_adjoint_operator_is_ours_and_composes():
     assert isinstance(A.H, op.LinearOperator)
     x = RNG.standard_normal(5)
     np.testing.assert_allclose(AtA(x), M.T @ M @ x, rtol=1e-13)
+
+
+def test_what_an_operators_methods_build_is_defined_beside_it_not_registered():
+    """``A @ B``, ``A + B``, ``c * A``, ``A ** 0``, ``A.H``, ``linearize`` and ``from_jax``
+    build classes of :mod:`operators.base` itself, which reaches nothing through a registry or a
+    module ``__getattr__``; what they compute on arrays is in the modules below it."""
+    import operators.base as base
+    import operators.protocol as protocol
+    import operators.rules as rules
+
+    A, B, g = matrix(M, "A"), matrix(M, "B"), jax_nonlinear(5)
+    built = [A.H @ B, A + B, 2 * A, A - B, -A, g @ g, g + g, 3 * g, g ** 0, A.H,
+             g.linearize(np.ones(5)), op.Operator.from_jax(jnp.sin, (2,), (2,)),
+             op.Operator.from_torch(torch.sin, (2,), (2,)), A @ pylops.MatrixMult(N)]
+    assert {type(b).__module__ for b in built} == {"operators.base"}
+    assert not hasattr(base, "__getattr__") and not hasattr(base, "register")
+    assert not any(hasattr(m, "Operator") for m in (protocol, rules))

@@ -57,10 +57,10 @@ def test_a_handler_takes_empty_operands_and_results():
     assert scaled.shape == (0, 3) and sums.shape == (0,) and cube_plus_one.shape == (2, 0, 4)
 
 
-def test_a_name_is_registered_once_and_not_for_another_handler():
+def test_a_name_becomes_a_target_once_and_not_for_another_handler():
     assert ffi_target("test_scaled_rows", HANDLER_SCALED_ROWS) == "test_scaled_rows"
     assert ffi_target("test_scaled_rows", HANDLER_SCALED_ROWS) == "test_scaled_rows"
-    with pytest.raises(ValueError, match="'test_scaled_rows' is registered with another"):
+    with pytest.raises(ValueError, match="'test_scaled_rows' is already another handler's"):
         ffi_target("test_scaled_rows", numba.cfunc(HANDLER)(scaled_rows))
 
 
