@@ -42,22 +42,13 @@ from operators.rules import (
 
 
 class Operator(OperatorProtocol):
-    """A differentiable map from arrays of shape ``dims`` to arrays of shape ``dimsd``.
+    """A differentiable map from arrays of shape ``dims`` to arrays of shape ``dimsd``, with
+    the methods that build operators: its Jacobian, its adjoint and the algebra.
 
-    Subclasses implement ``_forward(x)``, ``_jvp(x, v)`` and ``_vjp(x, w)`` on arrays already
-    shaped ``dims`` / ``dimsd`` (:class:`~operators.protocol.OperatorProtocol`); they may
-    override ``linearize`` to share work between the value and the derivatives.
-
-    Parameters
-    ----------
-    dims : int or tuple of int
-        Input shape.
-    dimsd : int or tuple of int
-        Output shape.
-    dtype : numpy dtype, optional
-        Floating-point type of inputs and outputs (default float64).
-    name : str, optional
-        Label used in error messages and reprs.
+    Constructed and subclassed as :class:`~operators.protocol.OperatorProtocol` (its
+    parameters ``dims``, ``dimsd``, ``dtype`` and ``name``; ``_forward(x)``, ``_jvp(x, v)`` and
+    ``_vjp(x, w)`` on arrays already shaped ``dims`` / ``dimsd``); a subclass may override
+    ``linearize`` to share work between the value and the derivatives.
     """
 
     def linearize(self, x) -> Jacobian:

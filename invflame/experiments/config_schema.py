@@ -167,8 +167,9 @@ SCHEMA: dict[str, Key | Section] = {
         "factor_range": Key(numbers(2), [0.3, 2.0], "'state-relation': bounds of the "
                             "temperature factor h (T - T0 = h x the relation's rise)",
                             rule=LOW_HIGH),
-        "subvoxel_spread": Key(NUMBER, 1.0, "'state-relation' on voxels: render each voxel "
-                               "at the progress that emits what a presumed spread of progress "
+        "subvoxel_spread": Key(NUMBER, 1.0, "'state-relation' on voxels and 'neural-centres': "
+                               "render each voxel at the progress that emits what a presumed "
+                               "spread of progress "
                                "inside it emits, the spread this many times the progress's "
                                "change over one voxel (invflame.representations.subvoxel); 0: "
                                "render the mean state", low=0.0),

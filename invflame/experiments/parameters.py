@@ -58,10 +58,10 @@ def state_relation(cfg: dict, scene: Scene) -> StateRelation:
 def subvoxel_emission(cfg: dict, scene: Scene) -> SubvoxelEmission | None:
     """The sub-voxel emission model of ``representation.subvoxel_spread`` with the
     configuration's state relation; None when the spread is 0 or the representation is not
-    voxels of the state relation's parameters."""
+    voxels or a network at the voxel centres of the state relation's parameters."""
     settings = cfg["representation"]
-    if (settings["kind"], settings["parameters"]) != ("voxel", "state-relation") \
-            or settings["subvoxel_spread"] == 0:
+    if settings["kind"] not in ("voxel", "neural-centres") \
+            or settings["parameters"] != "state-relation" or settings["subvoxel_spread"] == 0:
         return None
     return SubvoxelEmission(state_relation(cfg, scene), settings["subvoxel_spread"])
 
@@ -85,7 +85,8 @@ def make_representation(cfg: dict, scene: Scene):
                                          n_fine=settings["fine_samples"],
                                          batch_rays=settings["rays_per_batch"], **network)
     if kind == "neural-centres":
-        return NeuralCentresRepresentation(scene, **network)
+        return NeuralCentresRepresentation(scene, **network,
+                                           subvoxel=subvoxel_emission(cfg, scene))
     return VoxelRepresentation(scene.grid, scene.operator, temperature_range=_t_range(scene),
                                soot_max=cfg["soot"]["max"],
                                tv_smoothing=cfg["regularizer"]["tv_smoothing"],

@@ -21,8 +21,9 @@ Protocols
     (:mod:`invflame.experiments.measurement`), the start's amplitude and the flame's heat per
     product fitted to the spectra (:mod:`invflame.experiments.calibration`), every point
     parameterized by the methane state relation
-    (:mod:`invflame.representations.state_relation`), Tikhonov's voxels rendered at the
-    emission-equivalent progress of a presumed spread inside each (:data:`HONEST_VOXEL`), λ on
+    (:mod:`invflame.representations.state_relation`), each voxel rendered at the
+    emission-equivalent progress of a presumed spread inside it
+    (:mod:`invflame.representations.subvoxel`), λ on
     the noise-weighted scale, tuned on flames the study does not report on
     (:data:`HONEST_LAMBDA`), the networks evaluated at
     the voxel centres with a learned feature grid (:data:`HONEST_NETWORK`), each method run
@@ -72,19 +73,15 @@ SOLVERS = {
 """The optimizer of each representation under the paper's protocol (it trains both with Adam
 for a fixed number of epochs)."""
 
-HONEST_VOXEL = {"none": {"subvoxel_spread": 0.0}, "tikhonov": {"subvoxel_spread": 1.0},
-                "tv": {"subvoxel_spread": 0.0}}
-"""Voxel settings of the honest protocol per regularizer: VG/Tikh. renders each voxel at the
-emission-equivalent progress of a presumed spread inside it, one voxel's change of the progress
-either side of its mean (:mod:`invflame.representations.subvoxel`), chosen on the tuning half
-(``docs/validation.md``, "A voxel that emits as the flame inside it"); VG/NR and VG/TV render
-the mean state."""
-
 HONEST_NETWORK = {"kind": "neural-centres", "grid_levels": 4}
 """The networks of the honest protocol: evaluated at the voxel centres and rendered by the
 voxel forward map (:class:`~invflame.representations.neural.NeuralCentresRepresentation`),
 position encoded by the sinusoids and a learned feature grid of four levels whose finest has
-the voxels' resolution (:mod:`invflame.representations.neural.feature_grid`). The paper's
+the voxels' resolution (:mod:`invflame.representations.neural.feature_grid`). Like the voxels,
+they render each voxel at the emission-equivalent progress of a presumed spread inside it
+(``representation.subvoxel_spread``, default 1, :mod:`invflame.representations.subvoxel`),
+chosen on the tuning half for all six methods (``docs/validation.md``, "A voxel that emits as
+the flame inside it"). The paper's
 network, rendered along the rays and trained by Adam on pixel batches, ended within 4 % below
 to 14 % above its start on every report flame (``docs/validation.md``)."""
 
@@ -193,10 +190,10 @@ def method_config(preset: str, method: str, seed: int = 0, protocol: str = "pape
         solver = SOLVERS[representation]
         weight = {"lambda": 1e-3, "scaling": "paper"}
     else:
-        chosen = dict(HONEST_VOXEL[regularizer] if representation == "voxel"
-                      else HONEST_NETWORK)
-        representation = chosen.pop("kind", representation)
-        settings["representation"] = {**settings.get("representation", {}), **chosen}
+        if representation != "voxel":
+            chosen = dict(HONEST_NETWORK)
+            representation = chosen.pop("kind")
+            settings["representation"] = {**settings.get("representation", {}), **chosen}
         solver = HONEST_SOLVERS[representation]
         weight = {"lambda": HONEST_LAMBDA[representation][regularizer], "scaling": "chi2"}
         epochs = honest_epochs.get(method, epochs)

@@ -35,7 +35,10 @@ PROXY_WAVENUMBER = 690.0
 """Wavenumber (cm⁻¹) of the emission proxy: the centre of the CO₂ ν₂ band's wings that the
 quick and paper windows (650–725 and 660–710 cm⁻¹) see."""
 
-BISECTIONS = 30
+BISECTIONS = {"numpy": 52, "jax": 30}
+"""Bisections of :meth:`SubvoxelEmission.equivalent_progress` per array module: NumPy's reach
+the resolution of float64; under JAX one Newton step follows, which squares the error of
+30."""
 
 
 class SubvoxelEmission:
@@ -85,7 +88,7 @@ class SubvoxelEmission:
         (bisection on the increasing proxy, in the array module ``xp``)."""
         low = xp.zeros_like(target)
         high = xp.full_like(target, self.relation.progress_max)
-        for _ in range(BISECTIONS):
+        for _ in range(BISECTIONS["numpy" if xp is np else "jax"]):
             mid = 0.5 * (low + high)
             above = self.emission(mid, h, xp) > target
             low, high = xp.where(above, low, mid), xp.where(above, mid, high)

@@ -122,7 +122,7 @@ class VoxelRepresentation(Representation):
         else:  # (s, h) and, with soot, its normalized volume fraction
             dims = (n_fields - 2, *grid.shape)
             self.forward = forward @ op.JaxOperator(
-                lambda theta: _relation_fields(state_relation, theta, jnp, subvoxel), dims,
+                lambda theta: relation_fields(state_relation, theta, jnp, subvoxel), dims,
                 forward.dims,
                 dtype=forward.dtype, name="state relation")
             low, high = state_relation.factor_range
@@ -196,7 +196,7 @@ class VoxelRepresentation(Representation):
         theta = np.asarray(theta).reshape(self.dims)
         if self.state_relation is None:
             return denormalize(theta)
-        return _relation_fields(self.state_relation, theta.astype(np.float64), np)
+        return relation_fields(self.state_relation, theta.astype(np.float64), np)
 
     def rendered_fields(self, theta) -> np.ndarray:
         """The physical fields the forward map renders: :meth:`fields`, with a sub-voxel
@@ -204,10 +204,10 @@ class VoxelRepresentation(Representation):
         if self.subvoxel is None:
             return self.fields(theta)
         theta = np.asarray(theta, dtype=np.float64).reshape(self.dims)
-        return _relation_fields(self.state_relation, theta, np, self.subvoxel)
+        return relation_fields(self.state_relation, theta, np, self.subvoxel)
 
 
-def _relation_fields(relation: StateRelation, theta, xp, subvoxel=None):
+def relation_fields(relation: StateRelation, theta, xp, subvoxel=None):
     """Physical fields of state-relation parameters ``(s, h[, u_soot])`` per voxel, in the
     array module ``xp`` (NumPy or ``jax.numpy``): the relation's states (at the rendered
     progress of ``subvoxel`` when given), then the soot volume fraction from its normalized

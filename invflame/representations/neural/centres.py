@@ -16,8 +16,8 @@ PDHG included (their Jacobians are the voxel Jacobians times the small network J
 
 from __future__ import annotations
 
+import jax.numpy as jnp
 import numpy as np
-import torch
 
 import solvers
 from invflame.representations.curvature import group_curvature, quadratic_weight
@@ -26,8 +26,10 @@ from invflame.representations.neural.regularizers import regularizer_after
 from invflame.representations.neural.weights import NetworkWeights
 from invflame.representations.normalization import field_scales, per_field
 from invflame.representations.state_relation import StateRelation
+from invflame.representations.subvoxel import SubvoxelEmission
+from invflame.representations.voxel import relation_fields
 from invflame.representations.whitening import whitened
-from operators import Diagonal, Operator, TorchOperator
+from operators import Diagonal, JaxOperator, Operator, TorchOperator
 
 
 class NeuralCentresRepresentation(NetworkWeights):
@@ -48,6 +50,11 @@ class NeuralCentresRepresentation(NetworkWeights):
     state_relation : StateRelation, optional
         The network outputs this relation's progress and temperature factor
         (:class:`FieldNetwork`); None (default): the four fields.
+    subvoxel : SubvoxelEmission, optional
+        Render each voxel at the emission-equivalent progress of a presumed spread about the
+        network's progress at its centre (:mod:`invflame.representations.subvoxel`, as for
+        voxels); the regularizer and :meth:`fields` keep the network's mean state. Needs
+        ``state_relation``.
     """
 
     kind = "neural-centres"
@@ -56,8 +63,13 @@ class NeuralCentresRepresentation(NetworkWeights):
 
     def __init__(self, scene, n_frequencies: int = 10, hidden: int = 64, depth: int = 4,
                  seed: int = 0, forward: Operator | None = None,
-                 state_relation: StateRelation | None = None, grid_levels: int = 0):
+                 state_relation: StateRelation | None = None, grid_levels: int = 0,
+                 subvoxel: SubvoxelEmission | None = None):
+        if subvoxel is not None and state_relation is None:
+            raise ValueError("a sub-voxel emission model renders the state relation's progress: "
+                             "give state_relation too")
         self.scene = scene
+        self.subvoxel = subvoxel
         self.grid = scene.grid
         self.dtype = np.dtype(scene.dtype)
         self.network = FieldNetwork.for_scene(scene, n_frequencies, hidden, depth, seed,
@@ -66,16 +78,27 @@ class NeuralCentresRepresentation(NetworkWeights):
         self.centres = centre_points(scene.grid, self.network.lower.dtype)
         shape = (4, *self.grid.shape)
 
-        def fields(theta: torch.Tensor) -> torch.Tensor:
-            return self.network.evaluate(theta, self.centres)
-
-        self.at_centres = TorchOperator(fields, (self.n_parameters,), shape, dtype=self.dtype,
-                                        name="NetworkAtCentres")
+        forward = scene.operator if forward is None else forward
+        if subvoxel is None:
+            self.at_centres = TorchOperator(
+                lambda theta: self.network.evaluate(theta, self.centres), (self.n_parameters,),
+                shape, dtype=self.dtype, name="NetworkAtCentres")
+            rendered = self.at_centres
+        else:  # the network's (s, h) once, then its mean states and its rendered states
+            self.relation_parameters = TorchOperator(
+                lambda theta: self.network.evaluate(theta, self.centres, relation_parameters=True),
+                (self.n_parameters,), (2, *self.grid.shape), dtype=self.dtype,
+                name="NetworkAtCentres")
+            self.at_centres, rendered = (JaxOperator(
+                lambda s_h, model=model: relation_fields(state_relation, s_h, jnp, model),
+                (2, *self.grid.shape), shape, dtype=self.dtype, name=name,
+            ) @ self.relation_parameters for model, name in ((None, "state relation"),
+                                                             (subvoxel, "rendered states")))
         # the regularizer after the same operator object as the data map: an evaluation runs
         # the network once (solvers.Problem.evaluate)
         self.normalized_at_centres = Diagonal(1.0 / per_field(field_scales(), shape),
                                               dtype=self.dtype, name="normalize") @ self.at_centres
-        self.forward = (scene.operator if forward is None else forward) @ self.at_centres
+        self.forward = forward @ rendered
 
     def regularizer(self, kind: str) -> solvers.Regularizer | None:
         r""":math:`\Phi = g \circ (D \circ u_\theta(c))` for ``kind`` in {"none", "tikhonov",
@@ -124,3 +147,11 @@ class NeuralCentresRepresentation(NetworkWeights):
     def fields(self, theta) -> np.ndarray:
         """Physical fields ``(4, nx, ny, nz)`` (T in K, mole fractions) at the voxel centres."""
         return self.at_centres(theta)
+
+    def rendered_fields(self, theta) -> np.ndarray:
+        """The physical fields the forward map renders: :meth:`fields`, with a sub-voxel
+        model at each voxel's emission-equivalent progress."""
+        if self.subvoxel is None:
+            return self.fields(theta)
+        s_h = np.asarray(self.relation_parameters(theta), dtype=np.float64)
+        return relation_fields(self.network.state_relation, s_h, np, self.subvoxel)

@@ -164,8 +164,9 @@ class FieldNetwork(torch.nn.Module):
             parts.append(self.features(p))
         return torch.cat(parts, dim=-1)
 
-    def forward(self, points: torch.Tensor) -> torch.Tensor:
-        """Physical fields at points ``(..., 3)`` in m: shape ``(4, ...)``, T in K.
+    def forward(self, points: torch.Tensor, relation_parameters: bool = False) -> torch.Tensor:
+        """Physical fields at points ``(..., 3)`` in m: shape ``(4, ...)``, T in K; with
+        ``relation_parameters`` the state relation's progress and factor, shape ``(2, ...)``.
 
         The MLP runs on :data:`POINTS_PER_PASS` points at a time (the same values as all at
         once: the map is pointwise).
@@ -178,8 +179,9 @@ class FieldNetwork(torch.nn.Module):
         if self.state_relation is not None:
             relation = self.state_relation
             low, high = relation.factor_range
-            s = relation.progress_max * torch.sigmoid(z[0])
-            return torch.stack(relation.states(s, low + (high - low) * torch.sigmoid(z[1])))
+            s_h = (relation.progress_max * torch.sigmoid(z[0]),
+                   low + (high - low) * torch.sigmoid(z[1]))
+            return torch.stack(s_h if relation_parameters else relation.states(*s_h))
         t_min, t_max = self.temperature_range
         temperature = t_min + (t_max - t_min) * torch.sigmoid(z[:1])
         return torch.cat([temperature, torch.sigmoid(z[1:])])
@@ -284,8 +286,8 @@ class FieldNetwork(torch.nn.Module):
             offset += p.numel()
         return out
 
-    def evaluate(self, theta: torch.Tensor, points: torch.Tensor,
-                 normalized: bool = False) -> torch.Tensor:
+    def evaluate(self, theta: torch.Tensor, points: torch.Tensor, normalized: bool = False,
+                 relation_parameters: bool = False) -> torch.Tensor:
         """Fields at ``points`` (m) with the weights ``theta`` (differentiable in both).
 
         Parameters
@@ -296,12 +298,18 @@ class FieldNetwork(torch.nn.Module):
             Positions in m.
         normalized : bool, optional
             Return normalized fields :math:`u = f/s` instead of physical ones.
+        relation_parameters : bool, optional
+            Return the state relation's progress and factor, shape ``(2, ...)``.
 
         Returns
         -------
-        torch.Tensor, shape (4, ...)
+        torch.Tensor, shape (4, ...) (or (2, ...))
         """
-        out = torch.func.functional_call(self, self.unflatten(theta), (points,))
+        if relation_parameters and (normalized or self.state_relation is None):
+            raise ValueError("relation_parameters needs a network with a state relation, "
+                             "and gives them unnormalized")
+        out = torch.func.functional_call(self, self.unflatten(theta), (points,),
+                                         {"relation_parameters": relation_parameters})
         return self._normalize(out) if normalized else out
 
     def _check(self, theta: torch.Tensor) -> torch.Tensor:
@@ -386,13 +394,3 @@ def pretrain(network: FieldNetwork, target, iterations: int = 2000, lr: float = 
         losses[k] = loss.item()
     return losses
 
-
-def start_network(network: FieldNetwork, fields, offset: bool, iterations: int, lr: float,
-                  seed: int, progress: bool) -> None:
-    """Start ``network`` at voxel fields: offset by them (:meth:`FieldNetwork.offset_by`) when
-    ``offset``, else pretrained on them (:func:`pretrain` with ``iterations``, ``lr``, ``seed``
-    and ``progress``)."""
-    if offset:
-        network.offset_by(fields)
-    else:
-        pretrain(network, fields, iterations, lr, seed, progress=progress)

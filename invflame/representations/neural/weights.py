@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from invflame.representations.neural.network import FieldNetwork, start_network
+from invflame.representations.neural.network import FieldNetwork, pretrain
 from invflame.representations.protocol import Representation
 
 
@@ -50,5 +50,8 @@ class NetworkWeights(Representation):
         """
         if fields is not None:
             for network in self.networks:
-                start_network(network, fields, offset, iterations, lr, seed, progress)
+                if offset:
+                    network.offset_by(fields)
+                else:
+                    pretrain(network, fields, iterations, lr, seed, progress=progress)
         return np.concatenate([network.parameter_vector() for network in self.networks])

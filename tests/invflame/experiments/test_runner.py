@@ -315,7 +315,7 @@ def test_stop_chi2_ends_the_solve_at_the_first_iterate_within_the_level(tmp_path
                                    noise={"kind": "none"}), tmp_path / "free", progress=False)
 
 
-def test_a_subvoxel_model_renders_what_the_summary_scores_on_voxels_only(tmp_path):
+def test_a_subvoxel_model_renders_what_the_summary_scores_on_voxels_and_centres(tmp_path):
     cfg = tiny(representation={"subvoxel_spread": 1.0},
                solver={"name": "lbfgs", "iterations": 3, "options": {}})
     summary = runner.run_experiment(cfg, tmp_path, progress=False)
@@ -325,6 +325,8 @@ def test_a_subvoxel_model_renders_what_the_summary_scores_on_voxels_only(tmp_pat
     mean_state = runner.build_scene(cfg).simulate(
         Field.load(tmp_path / "reconstruction.npz").values)
     assert data["simulated"].sum() > mean_state.sum()  # rendered above the reported mean
-    for representation in ({"kind": "neural-centres"}, {"parameters": "fields"}):
+    centres = tiny(representation={"subvoxel_spread": 1.0, "kind": "neural-centres"})
+    assert subvoxel_emission(centres, runner.build_scene(centres)).spread == 1.0
+    for representation in ({"kind": "neural-field"}, {"parameters": "fields"}):
         off = tiny(representation={"subvoxel_spread": 1.0, **representation})
-        assert subvoxel_emission(off, runner.build_scene(off)) is None  # voxels' only
+        assert subvoxel_emission(off, runner.build_scene(off)) is None  # rays, free fields

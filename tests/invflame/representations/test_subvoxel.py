@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 import operators
+from invflame.representations.neural import NeuralCentresRepresentation
 from invflame.representations.state_relation import StateRelation
 from invflame.representations.subvoxel import SubvoxelEmission
 from invflame.representations.voxel import VoxelRepresentation
@@ -67,3 +68,23 @@ def test_the_voxel_map_with_the_model_passes_taylor_and_dot_tests(tiny_scene64):
 def test_a_spread_that_is_not_positive_is_refused(spread):
     with pytest.raises(ValueError, match="spread must be positive"):
         SubvoxelEmission(RELATION, spread)
+
+
+def test_a_network_at_the_centres_renders_through_the_model_and_reports_its_mean(
+        tiny_scene64, plume):
+    relation = StateRelation([300.0, 0.0, 0.0, 0.0], factor_range=(0.3, 2.0))
+    kwargs = {"n_frequencies": 2, "hidden": 16, "depth": 2, "state_relation": relation}
+    rep = NeuralCentresRepresentation(tiny_scene64, **kwargs,
+                                      subvoxel=SubvoxelEmission(relation, 1.0))
+    theta = rep.initial_parameters(plume, iterations=30, lr=3e-3, progress=False)
+    assert operators.taylor_test(rep.forward, theta, h0=1e-3, seed=0).passed
+    assert operators.jacobian_dottest(rep.forward, theta).passed
+    plain = NeuralCentresRepresentation(tiny_scene64, **kwargs)
+    np.testing.assert_allclose(rep.fields(theta), plain.fields(theta), rtol=1e-12)
+    np.testing.assert_allclose(rep.forward(theta), tiny_scene64.simulate(
+        rep.rendered_fields(theta)), rtol=1e-10)
+    assert rep.forward(theta).sum() > plain.forward(theta).sum()
+    assert rep.regularizer("tikhonov")(theta) == pytest.approx(
+        plain.regularizer("tikhonov")(theta), rel=1e-12)  # on the mean state
+    with pytest.raises(ValueError, match="give state_relation"):
+        NeuralCentresRepresentation(tiny_scene64, subvoxel=SubvoxelEmission(relation, 1.0))
