@@ -169,10 +169,10 @@ SCHEMA: dict[str, Key | Section] = {
                             rule=LOW_HIGH),
         "subvoxel_spread": Key(NUMBER, 1.0, "'state-relation' on voxels and 'neural-centres': "
                                "render each voxel at the progress that emits what a presumed "
-                               "spread of progress "
-                               "inside it emits, the spread this many times the progress's "
-                               "change over one voxel (invflame.representations.subvoxel); 0: "
-                               "render the mean state", low=0.0),
+                               "spread of progress inside it emits, the spread this many times "
+                               "the progress's change over one voxel "
+                               "(invflame.representations.subvoxel); 0: render the mean state",
+                               low=0.0),
         "frequencies": _positive(INTEGER, 4, "networks: frequencies of the positional encoding "
                                  "of each coordinate (the paper's 10 resolve structure far "
                                  "finer than the voxels the fields are scored on)"),

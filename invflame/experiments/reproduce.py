@@ -23,9 +23,8 @@ Protocols
     parameterized by the methane state relation
     (:mod:`invflame.representations.state_relation`), each voxel rendered at the
     emission-equivalent progress of a presumed spread inside it
-    (:mod:`invflame.representations.subvoxel`), λ on
-    the noise-weighted scale, tuned on flames the study does not report on
-    (:data:`HONEST_LAMBDA`), the networks evaluated at
+    (:mod:`invflame.representations.subvoxel`), λ on the noise-weighted scale, tuned on
+    flames the study does not report on (:data:`HONEST_LAMBDA`), the networks evaluated at
     the voxel centres with a learned feature grid (:data:`HONEST_NETWORK`), each method run
     until its objective stops falling (:data:`HONEST_SOLVERS`), and the table says how many
     iterations that took.
@@ -80,10 +79,10 @@ position encoded by the sinusoids and a learned feature grid of four levels whos
 the voxels' resolution (:mod:`invflame.representations.neural.feature_grid`). Like the voxels,
 they render each voxel at the emission-equivalent progress of a presumed spread inside it
 (``representation.subvoxel_spread``, default 1, :mod:`invflame.representations.subvoxel`),
-chosen on the tuning half for all six methods (``docs/validation.md``, "A voxel that emits as
-the flame inside it"). The paper's
-network, rendered along the rays and trained by Adam on pixel batches, ended within 4 % below
-to 14 % above its start on every report flame (``docs/validation.md``)."""
+chosen on the tuning half for all six methods (``docs/validation.md``, "Every method through
+the model"). The paper's network, rendered along the rays and trained by Adam on pixel
+batches, ended within 4 % below to 14 % above its start on every report flame
+(``docs/validation.md``)."""
 
 HONEST_SOLVERS = {
     "voxel": {"name": "lbfgs", "options": {"rtol_loss": 1e-3, "loss_window": 10}},
