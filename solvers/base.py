@@ -160,8 +160,6 @@ class Solver:
     #: Whether an iteration applies the problem's Jacobians many times (an inner linear solve,
     #: a linearized operator): such a solver refuses a problem that is not linearizable.
     applies_jacobians = False
-    #: Whether resuming from a checkpoint reproduces an uninterrupted run exactly.
-    exact_resume = True
 
     def __init__(self, *, max_iter: int = 100, rtol_loss: float | None = None,
                  rtol_x: float | None = None, gtol: float | None = None,
@@ -196,6 +194,12 @@ class Solver:
     def state_from_arrays(self, arrays: dict[str, np.ndarray], run: RunState) -> dict[str, Any]:
         """Inverse of :meth:`state_to_arrays` (0-d arrays become Python numbers)."""
         return {k: (v.item() if v.ndim == 0 else v) for k, v in arrays.items()}
+
+    @classmethod
+    def resumes_exactly(cls, arrays: dict[str, np.ndarray]) -> bool:
+        """Whether a run resumed from a checkpoint holding the state ``arrays``
+        (:meth:`state_to_arrays`) continues exactly as the uninterrupted run would."""
+        return True
 
     # -- the run -------------------------------------------------------------------------------
     def check(self, problem: Problem) -> None:

@@ -129,7 +129,7 @@ def resumed_from(cfg: dict, folder, per_epoch: int, changed: list[str]) -> dict:
     -------
     dict
         ``from_iteration`` (the checkpoint's solver iteration), ``exact`` (whether the solver
-        resumes exactly), ``forced`` and ``changed``.
+        resumes exactly from this checkpoint), ``forced`` and ``changed``.
 
     Raises
     ------
@@ -138,10 +138,12 @@ def resumed_from(cfg: dict, folder, per_epoch: int, changed: list[str]) -> dict:
         once, past its own limit).
     """
     solver = cfg["solver"]
-    done = solvers.load_checkpoint(Path(folder) / CHECKPOINT).meta["iteration"]
+    checkpoint = solvers.load_checkpoint(Path(folder) / CHECKPOINT)
+    done = checkpoint.meta["iteration"]
     if done > solver["iterations"] * per_epoch:
         raise _below_done(folder, done / per_epoch, solver["iterations"])
-    return {"from_iteration": done, "exact": solvers.get(solver["name"]).exact_resume,
+    exact = solvers.get(solver["name"]).resumes_exactly(checkpoint.state)
+    return {"from_iteration": done, "exact": exact,
             "forced": bool(changed), "changed": changed}
 
 

@@ -12,8 +12,9 @@
     halfway through writing that iteration's checkpoint, leaving a torn temporary file beside
     the previous checkpoint.
 
-The tests in ``test_checkpoint.py`` import this module for :func:`make_problem` and
-:func:`make_solver`, so the killed run and the runs they compare it with share one definition.
+The tests import this module for :func:`killed_run`, which runs it so, and for
+:func:`make_problem` and :func:`make_solver`, so that the killed run and the runs they compare
+it with share one definition.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from __future__ import annotations
 import importlib.util
 import os
 import signal
+import subprocess
 import sys
 from pathlib import Path
 
@@ -35,9 +37,11 @@ SEED = 11
 OPTIONS = {"gd": {}, "adam": {"lr": 0.05}, "gauss-newton": {"damping": 1.0},
            "lbfgs": {"pgtol": 0.0, "ftol": 0.0}, "pdhg": {"inner_iter": 10},
            "jaxopt-lbfgs": {}, "preconditioned-lbfgs": {}}
-"""Each solver's options; SciPy's own tests are off so that the stopping rule ends the run."""
+"""Each solver's options; SciPy's tolerances at 0, so that its L-BFGS-B runs until the loss
+no longer falls in float64."""
 MAX_ITER = {"lbfgs": 200}
-"""Iteration limits other than 12: SciPy's L-BFGS-B runs until the gradient test ends it."""
+"""Iteration limits other than 12: SciPy's L-BFGS-B runs until its own test ends it (after 18
+iterations)."""
 GTOL = 1e-8
 """Projected-gradient norm (loss units per parameter unit) that ends a run early."""
 
@@ -71,6 +75,18 @@ def make_solver(name: str) -> solvers.Solver:
 def run(name: str, callbacks=()) -> solvers.Result:
     """The uninterrupted run of solver ``name`` (seed :data:`SEED`)."""
     return make_solver(name).run(make_problem(name), seed=SEED, callbacks=callbacks)
+
+
+def killed_run(name: str, path: Path, iteration: int, mode: str) -> None:
+    """Run this script for solver ``name`` with checkpoints at ``path`` until it kills itself
+    with SIGKILL at ``iteration`` in ``mode``; asserts that it died so, leaving a torn temporary
+    file beside the checkpoint exactly when killed mid-write."""
+    done = subprocess.run([sys.executable, __file__, name, str(path), str(iteration), mode],
+                          capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "PYTHONWARNINGS": "ignore"})
+    assert done.returncode == -signal.SIGKILL, done.stderr
+    torn = [p.name for p in path.parent.iterdir() if p.name.endswith(".tmp")]
+    assert len(torn) == (mode == "mid-write"), torn
 
 
 def _die():

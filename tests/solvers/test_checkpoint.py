@@ -1,10 +1,6 @@
 """Checkpoints and resume: an interrupted run, resumed, equals an uninterrupted one."""
 
 import io
-import os
-import signal
-import subprocess
-import sys
 
 import numpy as np
 import pylops
@@ -19,7 +15,6 @@ from . import kill_worker
 OPTIONS = {"gd": {}, "adam": {"lr": 0.05}, "gauss-newton": {}, "lbfgs": {},
            "pdhg": {"inner_iter": 10}, "jaxopt-lbfgs": {},
            "preconditioned-lbfgs": {}}
-EXACT = [name for name in solvers.available() if solvers.get(name).exact_resume]
 
 
 class Interrupt(Exception):
@@ -45,7 +40,7 @@ def problem_for(nonlinear_problem, numpy_forward):
     return make
 
 
-@pytest.mark.parametrize("name", EXACT)
+@pytest.mark.parametrize("name", solvers.available())
 def test_interrupted_and_resumed_run_equals_uninterrupted_run(problem_for, tmp_path, name):
     problem = problem_for(name)
     solver = solvers.get(name)(max_iter=8, **OPTIONS[name])
@@ -98,19 +93,6 @@ def test_stochastic_run_resumes_exactly(stochastic_problem, tmp_path, name):
     np.testing.assert_array_equal(resumed.history["loss"], full.history["loss"])
     other_seed = solvers.solve(sp, name, max_iter=9, seed=4, **OPTIONS[name])
     assert not np.array_equal(other_seed.x, full.x)
-
-
-def test_scipy_lbfgs_resume_continues_the_run(nonlinear_problem, tmp_path):
-    assert not solvers.get("lbfgs").exact_resume  # SciPy restarts its memory on resume
-    path = tmp_path / "lbfgs.npz"
-    first = solvers.solve(nonlinear_problem, "lbfgs", max_iter=4,
-                          callbacks=[solvers.Checkpoint(path)])
-    resumed = solvers.solve(nonlinear_problem, "lbfgs", max_iter=40, resume=path)
-    assert first.iterations == 4 and resumed.iterations > 4
-    np.testing.assert_array_equal(resumed.history["loss"][:5], first.history["loss"])
-    np.testing.assert_array_equal(resumed.history["iteration"],
-                                  np.arange(resumed.iterations + 1))
-    assert resumed.loss < 1e-3 * first.history["loss"][0]
 
 
 def test_resume_refuses_another_solver_or_other_options(nonlinear_problem, tmp_path):
@@ -225,16 +207,6 @@ KILL_MODES = dict(zip(solvers.available(),
 """A mode of death for each solver, every mode used (see ``kill_worker.py``)."""
 
 
-def _killed_run(name, path, iteration, mode):
-    """Run ``kill_worker.py`` until it kills itself with SIGKILL at ``iteration``."""
-    done = subprocess.run([sys.executable, kill_worker.__file__, name, str(path), str(iteration),
-                           mode], capture_output=True, text=True, timeout=120,
-                          env={**os.environ, "PYTHONWARNINGS": "ignore"})
-    assert done.returncode == -signal.SIGKILL, done.stderr
-    torn = [p.name for p in path.parent.iterdir() if p.name.endswith(".tmp")]
-    assert len(torn) == (mode == "mid-write"), torn  # a kill mid-write leaves its temporary
-
-
 def _kill_iteration(name, iterations, mode):
     """A seeded random iteration to die at, after the first checkpoint and before the end."""
     first = 2 if mode == "before-save" else 1
@@ -251,14 +223,14 @@ def _killed_and_resumed(tmp_path, name):
     full = solver.run(problem, seed=kill_worker.SEED)  # kill_worker.run; one solver keeps its jit
     iteration = _kill_iteration(name, full.iterations, KILL_MODES[name])
     path = tmp_path / "run.npz"
-    _killed_run(name, path, iteration, KILL_MODES[name])
+    kill_worker.killed_run(name, path, iteration, KILL_MODES[name])
     saved = solvers.load_checkpoint(path).meta["iteration"]
     return full, solver.run(problem, resume=path), iteration, saved
 
 
-@pytest.mark.parametrize("name", EXACT)
+@pytest.mark.parametrize("name", solvers.available())
 def test_a_run_killed_at_a_random_point_resumes_bit_for_bit(tmp_path, name):
-    """Every solver that resumes exactly: a process running it dies by SIGKILL at a random
+    """Every solver: a process running it dies by SIGKILL at a random
     iteration (after a checkpoint, before one, or halfway through writing one); the run resumed
     from the checkpoint left behind equals the uninterrupted run bit for bit."""
     full, resumed, iteration, saved = _killed_and_resumed(tmp_path, name)
@@ -272,23 +244,3 @@ def test_a_run_killed_at_a_random_point_resumes_bit_for_bit(tmp_path, name):
     np.testing.assert_array_equal(resumed.x, full.x)
     for column in ("iteration", "loss", "misfit", "regularizer", "grad_norm"):
         np.testing.assert_array_equal(resumed.history[column], full.history[column])
-
-
-def test_a_killed_scipy_lbfgs_run_resumes_to_the_same_minimum(tmp_path):
-    """SciPy's L-BFGS-B cannot resume exactly: it does not expose its memory of correction
-    pairs, so a resumed run restarts it at the checkpoint and takes other steps from there.
-    The history up to the checkpoint is kept bit for bit and the iteration count continues;
-    with SciPy's own tests off (``ftol = pgtol = 0``) both runs go on until the line search
-    can no longer lower the loss in float64, i.e. to the minimizer, so their final losses agree
-    to 1e-10 relative (the loss near a minimizer changes quadratically, far below that over
-    the distance between two such end points; float64 resolves 2e-16)."""
-    assert not solvers.get("lbfgs").exact_resume
-    full, resumed, _, saved = _killed_and_resumed(tmp_path, "lbfgs")
-
-    for column in ("iteration", "loss", "misfit", "regularizer", "grad_norm"):
-        np.testing.assert_array_equal(resumed.history[column][:saved + 1],
-                                      full.history[column][:saved + 1])
-    np.testing.assert_array_equal(resumed.history["iteration"],
-                                  np.arange(resumed.iterations + 1))
-    assert resumed.iterations > saved
-    np.testing.assert_allclose(resumed.loss, full.loss, rtol=1e-10)

@@ -5,8 +5,11 @@ import json
 import numpy as np
 import pytest
 
+import solvers
 from invflame.cli import main
 from invflame.experiments import config, runner
+from invflame.experiments.run_folder import CHECKPOINT
+from solvers.checkpoint import save_checkpoint
 
 TINY = {
     "truth": {"grid": 8, "source": "synthetic"},
@@ -79,19 +82,28 @@ def test_resume_refuses_changed_data_and_code_and_force_records_them(tmp_path, c
     assert json.loads((tmp_path / "fingerprint.json").read_text()) == saved  # the run's own now
 
 
-def test_the_summary_says_a_run_was_resumed_inexactly(tmp_path):
-    """SciPy's L-BFGS-B restarts its memory on resume (``exact_resume`` False): the summary of
-    a resumed run says from which iteration it continued and that the continuation is not
-    the uninterrupted run's; a run done in one go says it was not resumed."""
+def test_the_summary_says_whether_a_run_was_resumed_exactly(tmp_path):
+    """The summary of a resumed run says from which iteration it continued and whether the
+    continuation is the uninterrupted run's: L-BFGS-B's checkpoint holds its memory, one
+    without it (an older checkpoint) restarts the memory; a run done in one go says it was
+    not resumed."""
     lbfgs = {"name": "lbfgs", "iterations": 6, "options": {"pgtol": 0.0, "ftol": 0.0}}
     cfg = config.validate(dict(TINY, solver=lbfgs))
     runner.run_experiment(config.validate(dict(TINY, solver=dict(lbfgs, iterations=3))),
                           tmp_path, progress=False)
     assert json.loads((tmp_path / "summary.json").read_text())["resumed"] is None
     (tmp_path / "summary.json").unlink()
+    checkpoint = tmp_path / CHECKPOINT
+    saved = solvers.load_checkpoint(checkpoint)
     summary = runner.run_experiment(cfg, tmp_path, resume=True, progress=False)
-    assert summary["resumed"] == {"from_iteration": 3, "exact": False, "forced": False,
+    assert summary["resumed"] == {"from_iteration": 3, "exact": True, "forced": False,
                                   "changed": []}
+
+    save_checkpoint(checkpoint, saved.meta, saved.x, saved.grad, {})
+    (tmp_path / "summary.json").unlink()
+    with pytest.warns(RuntimeWarning, match="L-BFGS memory restarted"):
+        summary = runner.run_experiment(cfg, tmp_path, resume=True, progress=False)
+    assert summary["resumed"]["exact"] is False
     assert summary["iterations"] > 3
 
 
