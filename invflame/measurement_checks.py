@@ -3,7 +3,8 @@ r"""What a measurement file must hold, and what its radiance can plausibly be.
 :class:`MeasurementReader` gives checked access to the variables of an open measurement file
 (:mod:`invflame.measurement_file`): a missing variable, wrong dimensions or units, a mask that
 is not 0/1 flags, wavenumbers that are not positive and strictly monotone, a resolution
-coarser than the measured band, or a mask that leaves nothing are refused with an
+coarser than the measured band, a mask that leaves nothing, pixel counts beyond the image
+dimensions or a camera window that is not ``[min, max]`` are refused with an
 :class:`~invflame.errors.InputDataError` naming the file and the variable.
 
 :func:`warn_implausible` then looks at the radiance of each camera and warns
@@ -26,7 +27,14 @@ import numpy as np
 import xarray as xr
 
 from invflame.errors import InputDataError
+from invflame.geometry.rig_file import APODIZATIONS
 from operators.rte.planck import planck
+
+RADIANCE_UNITS = "W/(m2 sr cm-1)"
+"""``units`` of ``radiance``, ``nesr`` and ``sigma``."""
+
+DIMS = ("camera", "v", "u", "wavenumber")
+"""Dimensions of ``radiance`` and ``sigma``, in order."""
 
 HOTTEST_FLAME = 3500.0
 """Temperature in K whose black-body radiance bounds a flame's emission: above the adiabatic
@@ -110,12 +118,84 @@ class MeasurementReader:
             self.fail(f"missing global attribute {name!r}")
         return self.dataset.attrs[name]
 
+    def pixel_counts(self, n_cameras: int, nu: int, nv: int) -> np.ndarray:
+        """Each camera's pixel counts ``(nu, nv)``, shape (n_cameras, 2): the variable
+        ``pixels``, or the sizes ``nu`` and ``nv`` of the ``u`` and ``v`` dimensions for every
+        camera when the file has none."""
+        counts = self.variable("pixels", ("camera", "uv"), None, required=False)
+        if counts is None:
+            return np.tile([nu, nv], (n_cameras, 1))
+        if not (np.issubdtype(counts.dtype, np.integer) and np.all(counts >= 1)
+                and np.all(counts <= [nu, nv])):
+            self.fail(f"variable 'pixels' must hold each camera's pixel counts (nu, nv) as "
+                      f"integers from 1 to the sizes of 'u' and 'v', ({nu}, {nv}); got "
+                      f"{counts.tolist()}")
+        return counts.astype(int)
+
+    def windows(self, n_cameras: int) -> tuple | None:
+        """Each camera's spectral window ``(min, max)`` in cm⁻¹ from the variable ``window``
+        (None for a camera whose row is NaN, NaN: it measures every wavenumber); None when
+        the file has none."""
+        values = self.variable("window", ("camera", "bound"), "cm-1", required=False)
+        if values is None:
+            return None
+        if values.shape != (n_cameras, 2):
+            self.fail(f"variable 'window' must hold [min, max] in cm-1 for each of the "
+                      f"{n_cameras} cameras, shape ({n_cameras}, 2); got shape {values.shape}")
+        windows = []
+        for camera, (low, high) in enumerate(values.astype(np.float64)):
+            if np.isnan(low) and np.isnan(high):
+                windows.append(None)
+            elif np.isfinite(low) and np.isfinite(high) and 0 < low < high:
+                windows.append((float(low), float(high)))
+            else:
+                self.fail(f"camera {camera}: 'window' must be [min, max] in cm-1 with 0 < min "
+                          f"< max (or NaN, NaN: every wavenumber), got [{low:g}, {high:g}]")
+        return tuple(windows) if any(w is not None for w in windows) else None
+
+    def noise(self, n_out: int, masked: np.ndarray, unmeasured: np.ndarray
+              ) -> tuple[str, np.ndarray]:
+        """The attribute ``noise`` and the noise σ in W/(m²·sr·cm⁻¹) it names: ``nesr`` per
+        wavenumber (``n_out``), ``sigma`` per value (of ``radiance``'s shape), or ones per
+        wavenumber for ``"none"``.
+
+        Parameters
+        ----------
+        n_out : int
+            Number of wavenumbers.
+        masked : ndarray of bool, shape of ``radiance``
+            The values left out, where ``sigma`` may be NaN.
+        unmeasured : ndarray of bool, shape (n_out,)
+            The wavenumbers no pixel measures, where ``nesr`` may be NaN.
+        """
+        noise = self.attribute("noise")
+        if noise == "nesr":
+            sigma = self.variable("nesr", ("wavenumber",), RADIANCE_UNITS).astype(np.float64)
+            self.positive("nesr", sigma, unmeasured)
+        elif noise == "sigma":
+            sigma = self.variable("sigma", DIMS, RADIANCE_UNITS).astype(np.float64)
+            self.positive("sigma", sigma, masked)
+        elif noise == "none":
+            sigma = np.ones(n_out)
+        else:
+            self.fail(f"global attribute 'noise' = {noise!r}; allowed: 'nesr', 'sigma', 'none'")
+        return noise, sigma
+
+    def apodization(self) -> str:
+        """The global attribute ``apodization``, one that invflame models."""
+        apodization = self.attribute("apodization")
+        if apodization not in APODIZATIONS:
+            self.fail(f"global attribute 'apodization' = {apodization!r} is not modelled; "
+                      f"allowed: {', '.join(APODIZATIONS)}")
+        return apodization
+
     def positive(self, name: str, values: np.ndarray, masked: np.ndarray) -> None:
         """Refuse values of ``name`` that are not positive outside the mask."""
         ok = np.isnan(values) & masked | (values > 0)
         if not np.all(ok):
             self.fail(f"variable {name!r} must be positive where not masked (NaN allowed only "
-                      f"in bad pixels and wavenumbers); {int((~ok).sum())} values are not")
+                      f"in bad pixels and wavenumbers and outside a camera's window); "
+                      f"{int((~ok).sum())} values are not")
 
     def check_wavenumber(self, wavenumber: np.ndarray) -> None:
         """Refuse wavenumbers (cm⁻¹) that are not finite, positive and strictly monotone."""
@@ -156,7 +236,7 @@ class MeasurementReader:
     def check_finite(self, data: np.ndarray, masked: np.ndarray, wavenumber: np.ndarray,
                      nu: int, nv: int) -> None:
         """Refuse NaN or infinite radiance outside the mask (``data`` ``(n_pixels, n_out)``
-        in the file's camera, v, u order)."""
+        in the file's camera, v, u order, ``nv`` × ``nu`` per camera)."""
         bad = ~np.isfinite(data) & ~masked | np.isinf(data)
         if bad.any():
             where = np.argwhere(bad)[0]
@@ -164,7 +244,8 @@ class MeasurementReader:
             self.fail(f"variable 'radiance' holds {int(bad.sum())} NaN or infinite values "
                       f"outside the mask, the first at camera {camera}, v {pixel // nu}, "
                       f"u {pixel % nu}, wavenumber {wavenumber[where[1]]:g} cm-1; flag those "
-                      "pixels in 'bad_pixel' or wavenumbers in 'bad_wavenumber'")
+                      "pixels in 'bad_pixel', wavenumbers in 'bad_wavenumber', or give the "
+                      "camera its 'window'")
 
 
 def warn_implausible(radiance: np.ndarray, sigma: np.ndarray | None, masked: np.ndarray,

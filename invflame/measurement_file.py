@@ -20,6 +20,11 @@ variable            dimensions                 units: meaning
                                                (absent: every pixel kept)
 ``bad_wavenumber``  (wavenumber)               optional, 1 for a wavenumber to leave out,
                                                else 0 (absent: every wavenumber kept)
+``window``          (camera, bound)            cm-1, optional: each camera's own spectral
+                                               window [min, max]; NaN, NaN for a camera
+                                               measuring every wavenumber (absent: all do)
+``pixels``          (camera, uv)               optional, integers: each camera's pixel
+                                               counts (nu, nv) (absent: the sizes of u, v)
 ``position``        (camera, xyz)              m: the cameras' pinholes
 ``look_at``         (camera, xyz)              m: a point on each optical axis
 ``up``              (camera, xyz)              1: each image's up direction
@@ -30,16 +35,22 @@ variable            dimensions                 units: meaning
 =================== ========================== =========================================
 
 The camera variables are the records of a rig file (:mod:`invflame.geometry.rig_file`),
-with the pixel counts from the ``u`` and ``v`` dimensions, so the rig round-trips to that
-format. Global attributes: ``resolution`` (cm-1, 1/MOPD, finer than the measured band) and
-``apodization`` (``"triangular"``) of the instrument, ``noise`` (``"nesr"``, ``"sigma"`` or
-``"none"``), ``provenance`` (JSON: how the data were made), ``Conventions``,
-``invflame_version``, ``date_created``. :func:`read_measurement` refuses a malformed file and
+with the pixel counts from ``pixels`` or the ``u`` and ``v`` dimensions, so the rig
+round-trips to that format. Cameras of different pixel counts share the ``v`` and ``u``
+dimensions of the largest: camera ``c``'s image is ``radiance[c, :nv, :nu]``, the rest is
+padding (NaN, ``bad_pixel`` 1), not data. Global attributes: ``resolution`` (cm-1,
+1/MOPD, finer than the measured band; one for all cameras) and ``apodization``
+(``"triangular"``) of the instrument, ``noise`` (``"nesr"``, ``"sigma"`` or ``"none"``),
+``provenance`` (JSON: how the data were made), ``Conventions``, ``invflame_version``,
+``date_created``. :func:`read_measurement` refuses a malformed file and
 warns about radiance no flame can have emitted (:mod:`invflame.measurement_checks`); the user
 guide's page *Measurement files* shows how to write one by hand.
 
-**Masks.** ``radiance`` (and ``nesr`` or ``sigma``) may be NaN only where masked. In memory
-(:class:`~invflame.measurement.Measurement`), a masked value has ``sigma = inf`` —
+**Masks.** ``radiance`` (and ``nesr`` or ``sigma``) may be NaN only where masked: a bad
+pixel, a bad wavenumber, or a wavenumber outside the camera's ``window`` (a camera measures
+the wavenumbers :math:`\eta` with ``min <= eta <= max`` of its window, see
+:mod:`invflame.measurement`; the window may differ per camera, the resolution may not). In
+memory (:class:`~invflame.measurement.Measurement`), a masked value has ``sigma = inf`` —
 weight 0 in the data term (:func:`invflame.representations.whitening.noise_weights`) — and
 ``data = 0``; ``n_measurements`` counts only the others.
 """
@@ -57,15 +68,22 @@ import xarray as xr
 from invflame import __version__
 from invflame.atomic_files import read_netcdf, write_atomic
 from invflame.geometry import CameraRig
-from invflame.geometry.rig_file import APODIZATIONS, parse_rig, rig_records
-from invflame.measurement import Measurement
-from invflame.measurement_checks import MeasurementReader, warn_implausible
-
-RADIANCE_UNITS = "W/(m2 sr cm-1)"
-"""``units`` of ``radiance``, ``nesr`` and ``sigma``."""
-
-DIMS = ("camera", "v", "u", "wavenumber")
-"""Dimensions of ``radiance`` and ``sigma``, in order."""
+from invflame.geometry.rig_file import parse_rig, rig_records
+from invflame.measurement import (
+    Measurement,
+    camera_channels,
+    channel_mask,
+    check_windows,
+    combined_windows,
+    stated,
+    window_text,
+)
+from invflame.measurement_checks import (
+    DIMS,
+    RADIANCE_UNITS,
+    MeasurementReader,
+    warn_implausible,
+)
 
 CAMERA_VARIABLES = {
     # variable: (dimensions, units, long name)
@@ -88,9 +106,10 @@ class MeasurementFile:
     ----------
     measurement : Measurement
         Spectra ``(n_pixels, n_out)`` in W/(m²·sr·cm⁻¹), pixels camera after camera in the
-        rig's ray order, and their noise σ (``inf`` where masked).
+        rig's ray order, and their noise σ (``inf`` where masked, and outside a camera's
+        window).
     rig : CameraRig
-        The cameras (all with the same pixel counts).
+        The cameras, each with its own pixel counts.
     wavenumber : ndarray, shape (n_out,)
         The measured wavenumbers in cm⁻¹.
     resolution : float
@@ -98,6 +117,9 @@ class MeasurementFile:
     apodization : str
         The instrument's apodization (one of
         :data:`invflame.geometry.rig_file.APODIZATIONS`).
+    windows : tuple of ((float, float) or None), or None
+        Each camera's own spectral window ``(min, max)`` in cm⁻¹ (None: every wavenumber);
+        None when no camera has one (:mod:`invflame.measurement`).
     """
 
     measurement: Measurement
@@ -105,6 +127,7 @@ class MeasurementFile:
     wavenumber: np.ndarray
     resolution: float
     apodization: str = "triangular"
+    windows: tuple | None = None
 
     def instrument(self, source: str) -> dict:
         """The instrument the data set for a run in place of ``[instrument]``, for its records.
@@ -118,15 +141,18 @@ class MeasurementFile:
         -------
         dict
             ``from`` (where the settings come from, in words), ``resolution`` (cm⁻¹),
-            ``apodization``, ``wavenumber_min`` and ``wavenumber_max`` (cm⁻¹) and
-            ``n_wavenumbers``.
+            ``apodization``, ``wavenumber_min`` and ``wavenumber_max`` (cm⁻¹),
+            ``n_wavenumbers`` and ``windows`` (each camera's ``[min, max]`` in cm⁻¹ or None;
+            None when no camera has one).
         """
         return {"from": f"the measurement file data.source = {source!r}, in place of "
                         "[instrument]",
                 "resolution": float(self.resolution), "apodization": self.apodization,
                 "wavenumber_min": float(np.min(self.wavenumber)),
                 "wavenumber_max": float(np.max(self.wavenumber)),
-                "n_wavenumbers": int(self.wavenumber.size)}
+                "n_wavenumbers": int(self.wavenumber.size),
+                "windows": None if not stated(self.windows) else [
+                    None if w is None else [float(w[0]), float(w[1])] for w in self.windows]}
 
     def instrument_comment(self, source: str) -> str:
         """TOML comment lines saying what :meth:`instrument` says, for a run's
@@ -136,18 +162,33 @@ class MeasurementFile:
                 "sets the instrument:\n"
                 f"# resolution = {used['resolution']:g} cm-1, apodization = "
                 f"{used['apodization']!r}, {used['n_wavenumbers']} wavenumbers "
-                f"{used['wavenumber_min']:g}-{used['wavenumber_max']:g} cm-1\n")
+                f"{used['wavenumber_min']:g}-{used['wavenumber_max']:g} cm-1"
+                + "".join(f", camera {camera} only {window_text(window)}"
+                          for camera, window in enumerate(self.windows or ())
+                          if window is not None) + "\n")
 
 
-def _mask(measurement: Measurement, rig: CameraRig) -> tuple[np.ndarray, np.ndarray]:
-    """Bad pixels ``(n_pixels,)`` and bad wavenumbers ``(n_out,)`` of a measurement's inf σ."""
-    masked = np.isinf(np.broadcast_to(measurement.sigma, measurement.data.shape))
+def _mask(measurement: Measurement, channels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Bad pixels ``(n_pixels,)`` and bad wavenumbers ``(n_out,)`` of a measurement's inf σ,
+    the values outside ``channels`` (the cameras' windows, ``(n_pixels, n_out)``) aside."""
+    masked = ~measurement.measured | ~channels
     pixels, wavenumbers = masked.all(axis=1), masked.all(axis=0)
-    if np.any(masked & ~pixels[:, None] & ~wavenumbers[None, :]):
+    if np.any(masked & channels & ~pixels[:, None] & ~wavenumbers[None, :]):
         raise ValueError("masked values (sigma = inf) must make up whole pixels or whole "
-                         "wavenumbers to be written: a measurement file masks bad pixels and "
-                         "bad wavenumbers")
+                         "wavenumbers, or lie outside their camera's window, to be written: a "
+                         "measurement file masks bad pixels, bad wavenumbers and each camera's "
+                         "channels outside its window")
     return pixels, wavenumbers
+
+
+def _images(rig: CameraRig, values: np.ndarray, fill) -> np.ndarray:
+    """Per-pixel ``values`` ``(n_pixels, ...)`` as images ``(n_cameras, nv, nu, ...)`` of the
+    largest pixel counts, each camera's at the top left, padded with ``fill``."""
+    nv, nu = np.max(rig.image_shapes, axis=0)
+    out = np.full((rig.n_cameras, nv, nu, *values.shape[1:]), fill, values.dtype)
+    for padded, image in zip(out, rig.split_images(values), strict=True):
+        padded[:image.shape[0], :image.shape[1]] = image
+    return out
 
 
 def measurement_dataset(measured: MeasurementFile) -> xr.Dataset:
@@ -156,29 +197,34 @@ def measurement_dataset(measured: MeasurementFile) -> xr.Dataset:
     Raises
     ------
     ValueError
-        For cameras with different pixel counts, shapes that do not match the rig and the
-        wavenumbers, or masked values that are not whole pixels or wavenumbers.
+        For shapes that do not match the rig and the wavenumbers, or masked values that are
+        neither whole pixels or wavenumbers nor outside their camera's window.
     """
     m, rig = measured.measurement, measured.rig
     wavenumber = np.asarray(measured.wavenumber, np.float64)
     if m.data.shape != (rig.n_rays, wavenumber.size):
         raise ValueError(f"the measurement's data {m.data.shape} do not match the rig's "
                          f"{rig.n_rays} pixels and {wavenumber.size} wavenumbers")
-    if len(set(rig.image_shapes)) != 1:
-        raise ValueError(f"a measurement file needs cameras with the same pixel counts; these "
-                         f"have image shapes {rig.image_shapes}")
-    bad_pixel, bad_wavenumber = _mask(m, rig)
-    masked = bad_pixel[:, None] | bad_wavenumber[None, :]
+    channels = channel_mask(rig, measured.windows, wavenumber)
+    bad_pixel, bad_wavenumber = _mask(m, channels)
+    masked = bad_pixel[:, None] | bad_wavenumber[None, :] | ~channels
 
     def images(values):
-        return rig.to_images(np.where(masked, np.nan, values))
+        return _images(rig, np.where(masked, np.nan, values), np.nan)
 
     variables = {"radiance": (DIMS, images(m.data),
                               {"units": RADIANCE_UNITS, "long_name": "measured spectral radiance"}),
-                 "bad_pixel": (DIMS[:3], rig.to_images(bad_pixel.astype(np.int8)),
+                 "bad_pixel": (DIMS[:3], _images(rig, bad_pixel.astype(np.int8), 1),
                                {"long_name": "1: pixel left out of the data term"}),
                  "bad_wavenumber": (("wavenumber",), bad_wavenumber.astype(np.int8),
-                                    {"long_name": "1: wavenumber left out of the data term"})}
+                                    {"long_name": "1: wavenumber left out of the data term"}),
+                 "pixels": (("camera", "uv"), np.array([c.n_pixels for c in rig.cameras],
+                                                       np.int32),
+                            {"long_name": "pixel counts (nu, nv) of each camera's image"})}
+    if stated(measured.windows):
+        variables["window"] = (("camera", "bound"), np.array(
+            [(np.nan, np.nan) if w is None else w for w in measured.windows], np.float64),
+            {"units": "cm-1", "long_name": "spectral window [min, max] of each camera"})
     sigma = np.asarray(m.sigma, np.float64)
     noise = "none" if not m.noisy else "nesr" if sigma.ndim == 1 else "sigma"
     if noise == "nesr":
@@ -231,8 +277,8 @@ def write_measurement(measured: MeasurementFile, path) -> Path:
     return write_atomic(path, lambda handle: handle.write(content))
 
 
-def read_measurement(path, rig: CameraRig | None = None,
-                     rig_source: str = "the rig") -> MeasurementFile:
+def read_measurement(path, rig: CameraRig | None = None, rig_source: str = "the rig",
+                     windows=None) -> MeasurementFile:
     """Read a measurement file (see the module docstring), checking every variable.
 
     Parameters
@@ -242,13 +288,18 @@ def read_measurement(path, rig: CameraRig | None = None,
     rig : CameraRig, optional
         Cameras the data must come from (a configuration's rig): the file's must be the same.
     rig_source : str, optional
-        What gave ``rig``, for messages (e.g. the rig file's name).
+        What gave ``rig`` and ``windows``, for messages (e.g. the rig file's name).
+    windows : tuple of ((float, float) or None), optional
+        Each camera's own spectral window in cm⁻¹ as the configuration's rig states it
+        (:class:`~invflame.geometry.rig_file.RigSpec`): a camera measures only the wavenumbers
+        inside both its window in the file and this one.
 
     Returns
     -------
     MeasurementFile
         Masked values have ``sigma = inf`` and ``data = 0``. ``sigma`` is per wavenumber for
-        ``nesr`` (or unknown noise, σ = 1, ``noisy`` False) without bad pixels, else per value.
+        ``nesr`` (or unknown noise, σ = 1, ``noisy`` False) when only whole wavenumbers are
+        masked, else per value. ``windows`` are those of the file and of ``windows`` together.
 
     Raises
     ------
@@ -259,7 +310,10 @@ def read_measurement(path, rig: CameraRig | None = None,
         dimensions or units, a shape or camera that does not match ``rig``, NaN outside the
         mask, masks that are not 0/1 flags or leave out every pixel or wavenumber, wavenumbers
         that are not positive and strictly monotone, a resolution coarser than the measured
-        band or noise that is not positive; the message names the file and the variable.
+        band, noise that is not positive, pixel counts beyond the image dimensions, or a
+        camera window that is not ``[min, max]`` with ``0 < min < max`` or holds none of the
+        wavenumbers; the message names the file (or ``rig_source``) and the variable (or the
+        camera and the key).
 
     Warns
     -----
@@ -275,58 +329,63 @@ def read_measurement(path, rig: CameraRig | None = None,
     wavenumber = read.variable("wavenumber", ("wavenumber",), "cm-1").astype(np.float64)
     read.check_wavenumber(wavenumber)
     n_cameras, nv, nu, n_out = radiance.shape
+    pixels = read.pixel_counts(n_cameras, nu, nv)
     records = {name: read.variable(name, dims, units, required=name != "principal_point")
                for name, (dims, units, _) in CAMERA_VARIABLES.items()}
     spec = parse_rig([{key: values[i].tolist() for key, values in records.items()
-                       if values is not None} | {"pixels": [nu, nv]}
+                       if values is not None} | {"pixels": pixels[i].tolist()}
                       for i in range(n_cameras)], str(path))
     if rig is not None:
         _check_same_rig(read, spec.rig, rig, rig_source)
-    bad_pixel = read.flags("bad_pixel", DIMS[:3], "pixel")
+    own = read.windows(n_cameras)
+    check_windows(own, wavenumber, str(path), "measured")
+    own = combined_windows(own, windows, rig_source, f"the measurement file {path}")
+    check_windows(own, wavenumber, rig_source, "measured")
+    inside = (np.arange(nv)[:, None] < pixels[:, None, None, 1]) & (
+        np.arange(nu) < pixels[:, None, None, 0])  # (camera, v, u): not padding
+    bad_pixel = read.flags("bad_pixel", DIMS[:3], "pixel") & inside
     bad_wavenumber = read.flags("bad_wavenumber", ("wavenumber",), "wavenumber")
-    read.check_mask(bad_pixel, bad_wavenumber)
-    bad_pixel = bad_pixel.reshape(-1)
-    masked = bad_pixel[:, None] | bad_wavenumber[None, :]
-    data = radiance.reshape(-1, n_out)
-    read.check_finite(data, masked, wavenumber, nu, nv)
-    noise = read.attribute("noise")
-    if noise == "nesr":
-        sigma = read.variable("nesr", ("wavenumber",), RADIANCE_UNITS).astype(np.float64)
-        read.positive("nesr", sigma, bad_wavenumber)
-    elif noise == "sigma":
-        sigma = read.variable("sigma", DIMS, RADIANCE_UNITS).astype(np.float64).reshape(-1, n_out)
-        read.positive("sigma", sigma, masked)
-    elif noise == "none":
-        sigma = np.ones(n_out)
-    else:
-        read.fail(f"global attribute 'noise' = {noise!r}; allowed: 'nesr', 'sigma', 'none'")
+    read.check_mask(bad_pixel[inside], bad_wavenumber)
+    channels = camera_channels(own, wavenumber, n_cameras)
+    masked = ((~inside | bad_pixel)[..., None] | bad_wavenumber
+              | ~channels[:, None, None, :])  # radiance's shape
+    read.check_finite(radiance.reshape(-1, n_out), masked.reshape(-1, n_out), wavenumber, nu, nv)
+    noise, sigma = read.noise(n_out, masked, bad_wavenumber | ~channels.any(axis=0))
     resolution = read.attribute("resolution")
     read.check_resolution(resolution, wavenumber)
-    apodization = read.attribute("apodization")
-    if apodization not in APODIZATIONS:
-        read.fail(f"global attribute 'apodization' = {apodization!r} is not modelled; allowed: "
-                  f"{', '.join(APODIZATIONS)}")
+    apodization = read.apodization()
     try:
         provenance = json.loads(dataset.attrs.get("provenance", "{}"))
     except json.JSONDecodeError as err:
         read.fail(f"global attribute 'provenance' is not JSON: {err}")
-    known = None if noise == "none" else np.broadcast_to(sigma, data.shape).reshape(radiance.shape)
-    warn_implausible(radiance, known, masked.reshape(radiance.shape), wavenumber, path)
-    if sigma.ndim == 2 or bad_pixel.any():
-        sigma = np.where(masked, np.inf, np.broadcast_to(sigma, data.shape))
+    warn_implausible(radiance, None if noise == "none" else np.broadcast_to(sigma, masked.shape),
+                     masked, wavenumber, path)
+    kept = inside.reshape(-1)
+    data, masked = radiance.reshape(-1, n_out)[kept], masked.reshape(-1, n_out)[kept]
+    if sigma.ndim > 1 or np.any(masked & ~bad_wavenumber):
+        sigma = np.where(masked, np.inf, np.broadcast_to(sigma, radiance.shape).reshape(
+            -1, n_out)[kept])
     else:
         sigma = np.where(bad_wavenumber, np.inf, sigma)
     measurement = Measurement(np.where(masked, 0, data).astype(data.dtype), sigma,
                               noise != "none", provenance)
-    return MeasurementFile(measurement, spec.rig, wavenumber, float(resolution), apodization)
+    return MeasurementFile(measurement, spec.rig, wavenumber, float(resolution), apodization,
+                           own)
+
+
+def _shapes(rig: CameraRig) -> str:
+    """The image shapes ``(nv, nu)`` of a rig's cameras, in words."""
+    shapes = rig.image_shapes
+    return (f"image shape {shapes[0]}" if len(set(shapes)) == 1
+            else f"image shapes {list(shapes)}")
 
 
 def _check_same_rig(read: MeasurementReader, found: CameraRig, expected: CameraRig,
                     source: str) -> None:
     """Refuse a file whose cameras are not ``expected``'s, naming the first difference."""
     if found.image_shapes != expected.image_shapes:
-        read.fail(f"variable 'radiance' holds {found.n_cameras} camera(s) of image shape "
-                  f"{found.image_shapes[0]} (v, u) but {source} has {expected.n_cameras} of "
+        read.fail(f"variable 'radiance' holds {found.n_cameras} camera(s) of {_shapes(found)} "
+                  f"(v, u) but {source} has {expected.n_cameras} of "
                   f"{list(expected.image_shapes)}: use the rig the data were measured with")
     mine, theirs = _camera_columns(found), _camera_columns(expected)
     for key in CAMERA_VARIABLES:

@@ -47,6 +47,7 @@ from invflame.background import Background
 from invflame.errors import GeometryError
 from invflame.field import validate_values
 from invflame.geometry import CameraRig, RaySegments, VoxelGrid, paper_rig, traverse
+from invflame.measurement import channel_mask
 from invflame.scene_settings import SceneSettings
 from invflame.spectroscopy.absorption_table import AbsorptionTable
 from operators import ILSConvolution
@@ -92,8 +93,8 @@ class Scene:
     **settings
         The other settings by keyword (``resolution``, ``out_wavenumber``, ``window``,
         ``dtype``, ``planck``, ``memory_budget``, ``batch_rays``, ``devices``,
-        ``rays_per_pixel``, ``background``, ``soot``, ``soot_constant``, ``soot_input``), as
-        there.
+        ``rays_per_pixel``, ``background``, ``soot``, ``soot_constant``, ``soot_input``,
+        ``camera_windows``), as there.
 
     Attributes
     ----------
@@ -119,6 +120,8 @@ class Scene:
         The known soot volume fraction.
     soot_input : bool
         Whether the soot volume fraction is the fifth field of the input.
+    camera_windows : tuple of ((float, float) or None), or None
+        Each camera's own spectral window in cm⁻¹ (:attr:`measured_channels`).
     """
 
     def __init__(self, grid: VoxelGrid, rig: CameraRig, table: AbsorptionTable, **settings):
@@ -131,7 +134,7 @@ class Scene:
         self.grid, self.rig, self.table = s.grid, s.rig, s.table
         self.dtype, self.planck, self.memory_budget = s.dtype, s.planck, s.memory_budget
         self.rays_per_pixel, self.background = s.rays_per_pixel, s.background
-        self.soot, self.soot_input = s.soot, s.soot_input
+        self.soot, self.soot_input, self.camera_windows = s.soot, s.soot_input, s.camera_windows
         self.wavenumber = s.table.wavenumber[s.band]
         self.segments: RaySegments = (handed_on["segments"] if "segments" in handed_on
                                       else self._traced())
@@ -295,6 +298,12 @@ class Scene:
     def data_shape(self) -> tuple[int, int]:
         """Output shape ``(n_rays, n_out)``."""
         return (self.n_rays, self.out_wavenumber.size)
+
+    @property
+    def measured_channels(self) -> np.ndarray:
+        """The output channels each pixel measures, those inside its camera's window: bool,
+        :attr:`data_shape` (all True without :attr:`camera_windows`)."""
+        return channel_mask(self.rig, self.camera_windows, self.out_wavenumber)
 
     # -- the forward map -------------------------------------------------------------------
     @cached_property

@@ -71,6 +71,12 @@ class SceneSettings:
         True: the soot volume fraction is a fifth field of the map's input, after the mole
         fractions (field shape ``(5, nx, ny, nz)``), to be reconstructed; the map then
         differentiates with respect to it too. Not with ``soot``. Default False.
+    camera_windows : sequence of ((float, float) or None), optional
+        Each camera's own spectral window ``(min, max)`` in cm⁻¹, None for a camera that
+        measures every output channel (:mod:`invflame.measurement`); default None, every
+        camera measures every channel. The map renders every channel for every pixel; the
+        windows say which of them are data
+        (:attr:`~invflame.scene.Scene.measured_channels`).
 
     Attributes
     ----------
@@ -83,7 +89,8 @@ class SceneSettings:
         For a grid, rig or background of another type.
     ValueError
         For a window holding fewer than 2 points of the table's grid, a soot field of another
-        shape or outside [0, 1), and for both ``soot`` and ``soot_input``.
+        shape or outside [0, 1), for both ``soot`` and ``soot_input``, and for camera windows
+        that are not one ``(min, max)`` with ``min < max`` (or None) per camera.
     """
 
     grid: VoxelGrid
@@ -102,6 +109,7 @@ class SceneSettings:
     soot: np.ndarray | None = None
     soot_constant: float | None = None
     soot_input: bool = False
+    camera_windows: tuple | None = None
     band: slice = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -121,7 +129,8 @@ class SceneSettings:
             soot.setflags(write=False)
         normal = {"dtype": np.dtype(self.dtype), "rays_per_pixel": int(self.rays_per_pixel),
                   "soot": soot, "soot_input": bool(self.soot_input),
-                  "band": _window_slice(self.table.wavenumber, self.window)}
+                  "band": _window_slice(self.table.wavenumber, self.window),
+                  "camera_windows": _camera_windows(self.camera_windows, self.rig.n_cameras)}
         for name, value in normal.items():
             object.__setattr__(self, name, value)
 
@@ -129,6 +138,18 @@ class SceneSettings:
     def sooty(self) -> bool:
         """Whether the scene's medium holds soot: a known field or an input field."""
         return self.soot is not None or self.soot_input
+
+
+def _camera_windows(windows, n_cameras: int) -> tuple | None:
+    """``windows`` as a tuple of ``(min, max)`` float pairs (cm⁻¹) or None, one per camera;
+    None when no camera has a window."""
+    if windows is None:
+        return None
+    windows = tuple(None if w is None else (float(w[0]), float(w[1])) for w in windows)
+    if len(windows) != n_cameras or any(w is not None and not w[0] < w[1] for w in windows):
+        raise ValueError(f"camera_windows must give one (min, max) window in cm-1 with min < "
+                         f"max, or None, for each of the {n_cameras} cameras; got {windows}")
+    return windows if any(w is not None for w in windows) else None
 
 
 def _window_slice(wavenumber: np.ndarray, window) -> slice:

@@ -18,7 +18,7 @@ FIGURES = {
     "01_composing_operators.ipynb": 2,
     "02_adjoint_and_taylor_tests.ipynb": 0,
     "03_swapping_solvers.ipynb": 2,
-    "04_measurement_file.ipynb": 3,
+    "04_measurement_file.ipynb": 4,
 }
 NOTEBOOKS = [FOLDER / name for name in FIGURES]
 CELL_TIMEOUT = 120  # s

@@ -45,7 +45,8 @@ def add_parser(subparsers) -> None:
         "as a run measures them (sections [data] and [noise]: by default on the truth's own "
         "grid with more sub-rays and a finer line-by-line step, plus NESR noise), and write "
         "them as a measurement file (NetCDF: radiance (camera, v, u, wavenumber) "
-        "[W/(m2 sr cm-1)], wavenumbers [cm-1], cameras, instrument, noise, mask and provenance; "
+        "[W/(m2 sr cm-1)], wavenumbers [cm-1], cameras, instrument, noise, mask, each "
+        "camera's own spectral window where the rig gives one, and provenance; "
         "see invflame.measurement_file; '[data] source' of 'invflame run' reads it) with a "
         "figure of one spectrum and the band-integrated camera images. --out FOLDER writes "
         "measurement.nc, spectra.npz and simulated.png into it; --out FILE.nc writes that "
@@ -110,12 +111,12 @@ def simulate_command(args: argparse.Namespace) -> int:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    import numpy as np
 
     from invflame.atomic_files import write_atomic, write_npz
     from invflame.experiments import config as configuration
     from invflame.experiments.runner import build_scene, load_truth, measure
     from invflame.measurement_file import MeasurementFile, write_measurement
+    from invflame.plotting.spectra import plot_spectrum_and_images
 
     cfg = configuration.load(args.config)
     if cfg["data"]["source"]:
@@ -131,18 +132,10 @@ def simulate_command(args: argparse.Namespace) -> int:
                    write_npz(args.out / "spectra.npz", radiance=spectra, sigma=measurement.sigma,
                              out_wavenumber=scene.out_wavenumber)]
     write_measurement(MeasurementFile(measurement, scene.rig, scene.out_wavenumber,
-                                      scene.resolution), written[0])
-    images = scene.to_images(spectra.sum(axis=1) * (scene.out_wavenumber[1]
-                                                    - scene.out_wavenumber[0]))
-    fig, axes = plt.subplots(1, len(images) + 1, figsize=(4 * (len(images) + 1), 3.6))
-    brightest = int(np.argmax(spectra.sum(axis=1)))
-    axes[0].plot(scene.out_wavenumber, spectra[brightest], "k.-")
-    axes[0].set(xlabel="wavenumber [cm⁻¹]", ylabel="radiance [W/(m²·sr·cm⁻¹)]",
-                title=f"brightest pixel (ray {brightest})")
-    for i, (ax, image) in enumerate(zip(axes[1:], images, strict=True)):
-        shown = ax.imshow(image, cmap="inferno", vmin=0, vmax=images.max())
-        ax.set(title=f"camera {i + 1}", xticks=[], yticks=[])
-    fig.colorbar(shown, ax=axes[1:], label="band radiance [W/(m²·sr)]")
+                                      scene.resolution, windows=scene.camera_windows),
+                      written[0])
+    fig = plot_spectrum_and_images(scene.out_wavenumber, spectra, None, scene.rig,
+                                   channels=measurement.measured)
     write_atomic(written[1], lambda handle: fig.savefig(handle, format="png", dpi=130,
                                                         bbox_inches="tight"))
     plt.close(fig)

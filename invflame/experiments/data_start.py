@@ -40,10 +40,11 @@ at the CO₂ ν₂ Q branch (667 cm⁻¹) in gas of a few hundred kelvin.
 every state of the state relation, as short as the brightest pixel allows, still emits at least
 :data:`~invflame.experiments.band_channels.THIN_RATIO` of its thin limit.
 
-**Masked values.** A bad wavenumber (masked in every pixel) leaves the channels; a pixel
-whose band then lacks a value, a bad pixel, contributes no row to the linear system:
-:math:`b`, :math:`A` and :math:`\sigma_b` keep only the pixels measured in every channel
-used, and :math:`M` counts those.
+**Masked values.** A bad wavenumber (masked in every pixel) leaves the channels, and so does
+one that some camera does not measure (outside its own spectral window), as long as the
+cameras share a channel; a pixel whose band then lacks a value, a bad pixel, contributes no
+row to the linear system: :math:`b`, :math:`A` and :math:`\sigma_b` keep only the pixels
+measured in every channel used, and :math:`M` counts those.
 
 **2. State relation.** Burke–Schumann methane–air combustion
 (:func:`invflame.phantoms.composition.burke_schumann_methane`) on its lean branch, mixture
@@ -56,6 +57,8 @@ represented).
 """
 
 from __future__ import annotations
+
+from itertools import pairwise
 
 import numpy as np
 
@@ -145,7 +148,8 @@ def band_tomography_start(scene, data, sigma=None,
     n_states : int, optional
         States tabulated along the state relation (≥ 2).
     measured : array_like of bool, shape ``scene.data_shape``, optional
-        False for a masked value (a bad pixel or wavenumber; see the module notes); default:
+        False for a masked value (a bad pixel or wavenumber, a channel outside a camera's
+        window; see the module notes); default:
         where ``sigma`` is finite (everything without ``sigma``).
 
     Returns
@@ -168,7 +172,9 @@ def band_tomography_start(scene, data, sigma=None,
     air = with_soot_field(np.broadcast_to(states[:, :1, None, None], (4, *scene.grid.shape)),
                           scene.field_shape[0] == 5)  # soot-free air
     excess = np.where(measured, data - np.asarray(scene.simulate(air), np.float64), 0.0)
-    somewhere = measured.any(axis=0)  # a wavenumber masked in every pixel leaves the band
+    cameras = [measured[start:stop].any(axis=0) for start, stop in pairwise(scene.rig.ray_offsets)]
+    somewhere = np.logical_and.reduce(cameras)  # measured by every camera, else by some pixel
+    somewhere = somewhere if somewhere.any() else measured.any(axis=0)
     if channels is None:
         peak = float(np.max(excess @ (channel_weights(scene) * somewhere)))
         channels = thin_channels(scene, peak, states)

@@ -154,7 +154,9 @@ def spectrum_and_image(folder, path, rig: CameraRig | None = None,
                        label: str = "reconstruction") -> Path:
     """Measured against simulated spectrum of the brightest pixel, and every camera's band
     image, of the run in ``folder`` (its ``data.npz``), whose reconstruction the figure names
-    ``label`` (:func:`invflame.plotting.spectra.plot_spectrum_and_images`).
+    ``label`` (:func:`invflame.plotting.spectra.plot_spectrum_and_images`); values masked in
+    the data (σ = inf: bad pixels and wavenumbers, channels outside a camera's window) are
+    not drawn.
 
     Parameters
     ----------
@@ -169,8 +171,10 @@ def spectrum_and_image(folder, path, rig: CameraRig | None = None,
     """
     data = np.load(Path(folder) / "data.npz")
     rig = run_rig(folder) if rig is None else rig
+    channels = (np.isfinite(np.broadcast_to(data["sigma"], data["measured"].shape))
+                if "sigma" in data.files else None)
     plt.close(plot_spectrum_and_images(data["out_wavenumber"], data["measured"],
-                                       data["simulated"], rig, label, path))
+                                       data["simulated"], rig, label, path, channels=channels))
     return Path(path)
 
 
@@ -229,13 +233,15 @@ def comparison_figures(out, runs: dict[str, Path]) -> list[Path]:
     """The figures of a comparison, written into ``out``.
 
     The field figures of :func:`field_figures` (the start of the first run, then every
-    reconstruction, against the ground truth), ``loss_curves.png``, and ``spectrum_image.png``
-    (of the first run, named in it).
+    reconstruction, against the ground truth; none for runs without a ground truth, whose
+    folders hold no ``truth.npz``), ``loss_curves.png``, and ``spectrum_image.png`` (of the
+    first run, named in it).
     """
     out = Path(out)
-    truth, estimates = run_fields(runs)
-    written = field_figures(out, truth, estimates)
     first, first_folder = next(iter(runs.items()))
+    written = []
+    if (Path(first_folder) / "truth.npz").is_file():
+        written += field_figures(out, *run_fields(runs))
     written += [loss_curves(runs, out / "loss_curves.png"),
                 spectrum_and_image(first_folder, out / "spectrum_image.png", label=first)]
     return written

@@ -1,5 +1,6 @@
 """What a run reads: the absorption table of its spectral window, the measurement file of
-``data.source`` and the ground truth of ``truth.source``."""
+``data.source``, the spectral window of each camera and the ground truth of
+``truth.source``."""
 
 from __future__ import annotations
 
@@ -12,6 +13,8 @@ from invflame.errors import ConfigError, InputDataError
 from invflame.experiments.config_scene import line_by_line_grid, reconstruction_grid, rig_spec
 from invflame.field import Field
 from invflame.geometry import CameraRig, VoxelGrid, paper_rig
+from invflame.geometry.rig_file import RigSpec
+from invflame.measurement import check_windows, stated
 from invflame.measurement_file import MeasurementFile, read_measurement
 from invflame.phantoms import make_phantom
 from invflame.phantoms.plume import plume_soot
@@ -47,13 +50,50 @@ def absorption_table(cfg: dict, step: float | None = None,
 
 def read_data(cfg: dict) -> MeasurementFile | None:
     """The measurement file of ``data.source`` (None when the data are simulated), checked
-    against the configuration's rig when it names one (``rig.file`` or ``rig.cameras``)."""
+    against the configuration's rig when it names one (``rig.file`` or ``rig.cameras``); a
+    camera's window there narrows the wavenumbers it measures
+    (:func:`~invflame.measurement_file.read_measurement`)."""
     source = cfg["data"]["source"]
     if not source:
         return None
     spec = rig_spec(cfg)
+    if spec is None:
+        return read_measurement(source)
     where = f"the rig file {cfg['rig']['file']}" if cfg["rig"]["file"] else "rig.cameras"
-    return read_measurement(source, rig=None if spec is None else spec.rig, rig_source=where)
+    return read_measurement(source, rig=spec.rig, rig_source=where, windows=spec.windows)
+
+
+def camera_windows(spec: RigSpec | None, measured: MeasurementFile | None, out_wavenumber):
+    """The spectral window of each camera of a run (:mod:`invflame.measurement`).
+
+    Parameters
+    ----------
+    spec : RigSpec or None
+        The configuration's rig (``rig.file`` or ``rig.cameras``), None for the paper's.
+    measured : MeasurementFile or None
+        The run's measured data (:func:`read_data`): their windows, those of the file and of
+        the rig together, already checked.
+    out_wavenumber : array_like
+        The channels the run models, cm⁻¹.
+
+    Returns
+    -------
+    tuple of ((float, float) or None), or None
+        One window ``(min, max)`` in cm⁻¹ per camera (None: every channel); None when no
+        camera has one.
+
+    Raises
+    ------
+    InputDataError
+        For a camera window of the rig that holds none of the simulated channels (naming the
+        rig, the camera and the key).
+    """
+    if measured is not None:
+        return measured.windows
+    if spec is None or not stated(spec.windows):
+        return None
+    check_windows(spec.windows, out_wavenumber, spec.source, "simulated")
+    return spec.windows
 
 
 def widened_window(cfg: dict, measured: MeasurementFile | None) -> tuple[dict, str]:

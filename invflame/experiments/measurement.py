@@ -11,7 +11,10 @@ truth instead
   reconstruction's 9),
 * on a **finer line-by-line grid** (``spectrum.step / data.step_divisor``),
 
-through the same cameras and instrument, then adds noise.
+through the same cameras and instrument, then adds noise. A camera with a spectral window of
+its own (:mod:`invflame.measurement`) measures only the channels inside it: its other
+channels are masked in the data (``sigma = inf``, ``data = 0``), so no value or noise drawn
+there is scored.
 
 Noise
 -----
@@ -121,8 +124,9 @@ def add_noise(clean: np.ndarray, sigma, seed: int) -> np.ndarray:
 
 def synthesis_scene(scene: Scene, truth: Field, table: AbsorptionTable,
                     rays_per_pixel: int) -> Scene:
-    """The scene that renders synthetic data: ``scene``'s cameras and instrument output grid,
-    the truth's own grid, ``rays_per_pixel`` sub-rays and ``table``'s line-by-line grid.
+    """The scene that renders synthetic data: ``scene``'s cameras, their windows and the
+    instrument's output grid, the truth's own grid, ``rays_per_pixel`` sub-rays and
+    ``table``'s line-by-line grid.
 
     Parameters
     ----------
@@ -138,12 +142,13 @@ def synthesis_scene(scene: Scene, truth: Field, table: AbsorptionTable,
     """
     return Scene(truth.grid, scene.rig, table, resolution=scene.resolution,
                  out_wavenumber=scene.out_wavenumber, dtype=scene.dtype,
-                 rays_per_pixel=rays_per_pixel)
+                 rays_per_pixel=rays_per_pixel, camera_windows=scene.camera_windows)
 
 
 def simulate_measurement(synthesis: Scene, truth: Field, noise: dict, seed: int,
                          provenance: dict | None = None) -> Measurement:
-    """Render the truth through ``synthesis`` and add the configured noise.
+    """Render the truth through ``synthesis`` and add the configured noise; each camera
+    measures only the channels inside its window (:attr:`.Scene.measured_channels`).
 
     Parameters
     ----------
@@ -161,10 +166,15 @@ def simulate_measurement(synthesis: Scene, truth: Field, noise: dict, seed: int,
     if truth.grid != synthesis.grid:
         raise ValueError("the truth must be given on the synthesis scene's grid")
     clean = synthesis.simulate(truth.values)
-    sigma = noise_sigma(noise, clean, synthesis.out_wavenumber)
+    channels = synthesis.measured_channels
+    measured = np.where(channels, clean, 0)  # the values the cameras measure
+    sigma = noise_sigma(noise, measured, synthesis.out_wavenumber)
     record = {"grid": list(truth.grid.shape), "rays_per_pixel": synthesis.rays_per_pixel,
               "step_cm-1": synthesis.step, "noise": dict(noise), **(provenance or {})}
+    if synthesis.camera_windows is not None:
+        record["camera_windows_cm-1"] = [None if w is None else list(w)
+                                         for w in synthesis.camera_windows]
     if sigma is None:
-        return Measurement(clean, np.ones(clean.shape[1]), False, record)
-    record["peak_snr"] = float(np.abs(clean).max() / sigma.max())
-    return Measurement(add_noise(clean, sigma, seed), sigma, True, record)
+        return Measurement(clean, np.ones(clean.shape[1]), False, record).restricted(channels)
+    record["peak_snr"] = float(np.abs(measured).max() / sigma[channels.any(axis=0)].max())
+    return Measurement(add_noise(clean, sigma, seed), sigma, True, record).restricted(channels)

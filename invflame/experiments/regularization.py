@@ -28,7 +28,8 @@ def configured_problem(cfg: dict, scene: Scene, representation, measurement: Mea
                        lam: float, x0=None) -> solvers.Problem:
     """The run's inverse problem: ``representation``'s problem with the configured regularizer
     at λ on the configuration's scale (:func:`regularizer_weight`), the misfit weighted by
-    the noise σ under ``"chi2"`` scaling, unweighted under ``"paper"``.
+    the noise σ under ``"chi2"`` scaling, unweighted under ``"paper"``; masked values (σ =
+    inf: bad pixels and wavenumbers, channels outside a camera's window) weigh 0 under both.
 
     Parameters
     ----------
@@ -47,7 +48,7 @@ def configured_problem(cfg: dict, scene: Scene, representation, measurement: Mea
     return representation.problem(
         measurement.data, regularizer=reg["kind"],
         lam=regularizer_weight(cfg, scene, measurement, lam), x0=x0,
-        sigma=measurement.sigma if reg["scaling"] == "chi2" else None)
+        sigma=measurement.sigma if reg["scaling"] == "chi2" else measurement.unweighted_sigma)
 
 
 def solver_options(cfg: dict, measurement: Measurement) -> dict:

@@ -63,6 +63,7 @@ from invflame.background_file import background_from_config
 from invflame.experiments import config as configuration
 from invflame.experiments.inputs import (
     absorption_table,
+    camera_windows,
     load_truth,
     read_data,
     scene_rig,
@@ -142,7 +143,7 @@ def build_scene(cfg: dict, table: AbsorptionTable | None = None,
     Raises
     ------
     InputDataError
-        If the rig's cameras state another resolution or window than the scene's.
+        If the rig's cameras state another resolution or windows that do not fit the scene.
     """
     grid = configuration.reconstruction_grid(cfg)
     spec = configuration.rig_spec(cfg)
@@ -166,7 +167,8 @@ def build_scene(cfg: dict, table: AbsorptionTable | None = None,
     return Scene(grid, rig, table, resolution=resolution, out_wavenumber=out_wavenumber,
                  rays_per_pixel=cfg["rig"]["rays_per_pixel"],
                  background=background_from_config(cfg["background"]),
-                 soot_input=cfg["soot"]["reconstruct"])
+                 soot_input=cfg["soot"]["reconstruct"],
+                 camera_windows=camera_windows(spec, measured, out_wavenumber))
 
 
 def measure(cfg: dict, scene: Scene, truth: Field, progress: bool = True) -> Measurement:

@@ -18,7 +18,7 @@ def initial_fields(cfg: dict, truth: Field, scene: Scene, measurement: Measureme
                    log=None) -> np.ndarray:
     """Starting fields ``scene.field_shape`` on the reconstruction grid: from the data (band
     tomography, masked values left out; with ``init.calibrate`` its amplitude and the state
-    relation's temperature factor then fitted to the spectra,
+    relation's temperature factor then fitted to the measured values of the spectra,
     :func:`~invflame.experiments.calibration.calibrate_start`), ambient air, or the paper's
     noisy truth (``truth`` on the reconstruction grid). When the scene reconstructs soot, the
     data-driven and ambient starts hold none (f_v = 0), the noisy truth its soot with the same
@@ -37,7 +37,9 @@ def initial_fields(cfg: dict, truth: Field, scene: Scene, measurement: Measureme
         if init["calibrate"]:
             calibration = calibrate_start(scene, measurement.data,
                                           with_soot_field(start, scene.soot_input),
-                                          state_relation(cfg, scene), sigma)
+                                          state_relation(cfg, scene),
+                                          measurement.unweighted_sigma if sigma is None
+                                          else sigma)
             start = calibration.fields
             if log is not None:
                 log("start calibrated to the spectra: " + ", ".join(

@@ -17,12 +17,16 @@ world-to-camera rotation matrix of the OpenCV and COLMAP convention (its rows ar
 right, down and forward axes in world coordinates, :math:`x_\mathrm{cam} = R\,(X - C)`); or
 ``quaternion`` = ``[w, x, y, z]``, the unit quaternion of that same rotation (COLMAP's
 ``qvec``). A camera may also state its spectrometer: ``resolution`` (cm⁻¹, 1/MOPD),
-``window`` (``[min, max]`` in cm⁻¹) and ``apodization`` (``"triangular"``). invflame models one
-instrument for all cameras, so cameras that state these must agree with each other.
+``apodization`` (``"triangular"``) and ``window`` (``[min, max]`` in cm⁻¹, ``0 < min < max``).
+The window may differ per camera: a camera measures only the instrument's channels inside its
+own (:mod:`invflame.measurement`), one without a window all of them. invflame models one
+instrument lineshape for all cameras, so the cameras that state a resolution or an
+apodization must agree with each other.
 
 The same records form the inline ``[[rig.cameras]]`` of a run configuration. A file is written
-with the camera's look-at point and up vector (:func:`write_rig`), every number as the shortest
-decimal that reads back to the same float, so reading it gives the same rays bit for bit.
+with the camera's look-at point and up vector (:func:`write_rig`, from
+:mod:`invflame.geometry.rig_writer`), every number as the shortest decimal that reads back to
+the same float, so reading it gives the same rays bit for bit.
 :data:`PRESETS` are rig files shipped with invflame: ``"paper"`` is the study's four cameras at
 ±1.5 m around the pool-fire box (:func:`invflame.geometry.paper_rig` on
 :meth:`~invflame.geometry.VoxelGrid.poolfire`, 32 × 32 pixels).
@@ -37,14 +41,17 @@ from importlib import resources
 from pathlib import Path
 
 import numpy as np
-import tomli_w
 
-from invflame.atomic_files import write_text
 from invflame.errors import GeometryError, InputDataError
 from invflame.geometry.camera import PinholeCamera
 from invflame.geometry.grid import VoxelGrid
 from invflame.geometry.rig import CameraRig
+from invflame.geometry.rig_writer import rig_records, rig_toml, write_rig
 from invflame.geometry.traversal import traverse
+
+__all__ = ["APODIZATIONS", "CAMERA_KEYS", "INSTRUMENT_KEYS", "PRESETS", "RigSpec",
+           "camera_from_record", "check_instrument", "check_rig_sees_grid", "parse_rig",
+           "preset_path", "read_rig", "rig_records", "rig_toml", "write_rig"]
 
 PRESETS = {"paper": "rig_paper.toml"}
 """Packaged rigs (in ``invflame/data/``): name → file."""
@@ -63,6 +70,9 @@ INSTRUMENT_KEYS = ("resolution", "window", "apodization")
 _ROTATION_TOLERANCE = 1e-6
 """Largest deviation of ``R Rᵀ`` from the identity (and of ``det R`` from 1) accepted."""
 
+_WINDOW_TOLERANCE = 1e-6
+"""cm⁻¹ by which a camera's window may reach beyond the modelled window (round-off)."""
+
 
 @dataclass(frozen=True)
 class RigSpec:
@@ -73,12 +83,19 @@ class RigSpec:
     rig : CameraRig
         The cameras.
     instrument : dict
-        The spectrometer settings common to the cameras that state them: ``resolution`` (cm⁻¹),
-        ``window`` (``[min, max]`` cm⁻¹), ``apodization``; empty when no camera states any.
+        The lineshape settings common to the cameras that state them: ``resolution``
+        (cm⁻¹), ``apodization``; empty when no camera states either.
+    windows : tuple of ((float, float) or None), or None
+        Each camera's own spectral window ``(min, max)`` in cm⁻¹ (None for a camera without
+        one); None when no camera states one.
+    source : str
+        What the records came from (a file name, ``"rig.cameras"``), for messages.
     """
 
     rig: CameraRig
     instrument: dict = field(default_factory=dict)
+    windows: tuple | None = None
+    source: str = "the rig"
 
 
 def _vector(record: dict, key: str, where: str, length: int) -> np.ndarray:
@@ -201,7 +218,7 @@ def _instrument(record: dict, where: str) -> dict:
         if not 0 < low < high:
             raise InputDataError(f"{where}: 'window' must be [min, max] in cm-1 with "
                                  f"0 < min < max, got {record['window']!r}")
-        out["window"] = [float(low), float(high)]
+        out["window"] = (float(low), float(high))
     if "apodization" in record:
         if record["apodization"] not in APODIZATIONS:
             raise InputDataError(f"{where}: 'apodization' = {record['apodization']!r} is not "
@@ -225,25 +242,28 @@ def parse_rig(records, where: str) -> RigSpec:
     ------
     InputDataError
         For no cameras, a malformed record (the message names the camera index and key) or
-        cameras whose spectrometer settings differ.
+        cameras whose resolutions or apodizations differ (their windows may differ).
     """
     if not isinstance(records, list) or not records:
         raise InputDataError(f"{where}: no cameras; list them as [[cameras]] tables (see "
                              "invflame.geometry.rig_file)")
-    cameras, common, stated_by = [], {}, {}
+    cameras, common, stated_by, windows = [], {}, {}, []
     for index, record in enumerate(records):
         at = f"{where}: camera {index}"
         cameras.append(camera_from_record(record, at))
-        for key, value in _instrument(record, at).items():
+        instrument = _instrument(record, at)
+        windows.append(instrument.pop("window", None))
+        for key, value in instrument.items():
             if key in common and common[key] != value:
                 raise InputDataError(
                     f"{at}: {key!r} = {value!r} differs from camera {stated_by[key]}'s "
-                    f"{common[key]!r}; invflame models one spectrometer for all cameras, so "
-                    "every camera must have the same spectral window, resolution and "
-                    "apodization")
+                    f"{common[key]!r}; invflame models one instrument lineshape for all "
+                    "cameras, so every camera must have the same resolution and apodization "
+                    "(the spectral window may differ per camera)")
             common.setdefault(key, value)
             stated_by.setdefault(key, index)
-    return RigSpec(CameraRig(tuple(cameras)), common)
+    own = tuple(windows) if any(window is not None for window in windows) else None
+    return RigSpec(CameraRig(tuple(cameras)), common, own, where)
 
 
 def preset_path(name: str) -> Path:
@@ -283,42 +303,6 @@ def read_rig(source) -> RigSpec:
     return parse_rig(raw.get("cameras"), str(path))
 
 
-def rig_records(rig: CameraRig) -> list[dict]:
-    """The camera records of a rig (look-at and up form), as :func:`parse_rig` reads them."""
-    def floats(values):
-        return [float(v) for v in values]
-
-    return [{"position": floats(c.position), "look_at": floats(c.look_at), "up": floats(c.up),
-             "focal_length": c.focal_length, "sensor_size": floats(c.sensor_size),
-             "pixels": list(c.n_pixels), "principal_point": floats(c.principal_point)}
-            for c in rig.cameras]
-
-
-def rig_toml(rig: CameraRig, instrument: dict | None = None) -> str:
-    """A rig file's text: ``[[cameras]]`` tables of :func:`rig_records` (lengths in m, pixel
-    coordinates in pixels), each with the ``instrument`` settings when given."""
-    lines = ["# invflame camera rig: lengths in m, pixel coordinates in pixels "
-             "(see invflame.geometry.rig_file)"]
-    for record in rig_records(rig):
-        lines += ["", "[[cameras]]"] + [f"{key} = {_toml(value)}" for key, value in
-                                         {**record, **(instrument or {})}.items()]
-    return "\n".join(lines) + "\n"
-
-
-def _toml(value) -> str:
-    """A number, string or list as an inline TOML value; floats in their shortest exact form."""
-    if isinstance(value, list):
-        return "[" + ", ".join(_toml(v) for v in value) + "]"
-    if isinstance(value, str):
-        return tomli_w.dumps({"v": value})[4:].strip()
-    return repr(value)
-
-
-def write_rig(rig: CameraRig, path, instrument: dict | None = None) -> Path:
-    """Write a rig file atomically (see :func:`rig_toml`); returns ``path``."""
-    return write_text(path, rig_toml(rig, instrument))
-
-
 def check_instrument(spec: RigSpec, resolution: float, window, where: str) -> None:
     """Refuse a rig whose cameras state another spectrometer than the one modelled.
 
@@ -329,19 +313,29 @@ def check_instrument(spec: RigSpec, resolution: float, window, where: str) -> No
     resolution : float
         The modelled resolution in cm⁻¹.
     window : (float, float) or None
-        The modelled line-by-line window in cm⁻¹; None: not checked (measured data, whose
-        channels set the window).
+        The modelled line-by-line window in cm⁻¹, which each camera's own window must lie
+        inside; None: not checked (measured data, whose channels set the window).
     where : str
         What configures the model, for the message.
+
+    Raises
+    ------
+    InputDataError
+        For another resolution, or a camera window reaching outside ``window`` (the message
+        names the rig, the camera and the key).
     """
     stated = spec.instrument
     if "resolution" in stated and not np.isclose(stated["resolution"], resolution):
         raise InputDataError(f"the rig's cameras have resolution {stated['resolution']:g} cm-1 "
-                             f"but {where} models {resolution:g} cm-1; make them agree")
-    if window is not None and "window" in stated and not np.allclose(stated["window"], window):
-        low, high = stated["window"]
-        raise InputDataError(f"the rig's cameras have the window {low:g}-{high:g} cm-1 but "
-                             f"{where} models {window[0]:g}-{window[1]:g} cm-1; make them agree")
+                             f"but {where} models {resolution:g} cm-1; make them agree (one "
+                             "resolution for all cameras)")
+    for camera, own in enumerate(spec.windows or ()):
+        if window is not None and own is not None and (
+                own[0] < window[0] - _WINDOW_TOLERANCE or own[1] > window[1] + _WINDOW_TOLERANCE):
+            raise InputDataError(f"{spec.source}: camera {camera}: 'window' = {own[0]:g}-"
+                                 f"{own[1]:g} cm-1 reaches outside the window {window[0]:g}-"
+                                 f"{window[1]:g} cm-1 that {where} models: narrow the camera's "
+                                 "window or widen [spectrum]")
 
 
 def check_rig_sees_grid(rig: CameraRig, grid: VoxelGrid, rays_per_pixel: int = 1) -> None:

@@ -29,7 +29,7 @@ def test_the_run_records_the_resolution_and_wavenumbers_of_the_file(tmp_path):
     used = {"from": f"the measurement file data.source = {str(source)!r}, in place of "
                     "[instrument]",
             "resolution": 4.0, "apodization": "triangular", "wavenumber_min": 666.0,
-            "wavenumber_max": 684.0, "n_wavenumbers": 19}
+            "wavenumber_max": 684.0, "n_wavenumbers": 19, "windows": None}
     assert summary["measured_instrument"] == used
     saved = json.loads((tmp_path / "run" / "summary.json").read_text())
     assert saved["measured_instrument"] == used

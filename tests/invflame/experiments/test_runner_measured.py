@@ -236,19 +236,27 @@ def test_a_rig_stating_another_resolution_is_refused(simulated, monkeypatch):
         runner.build_scene(cfg)
 
 
-def test_a_rig_window_must_be_the_simulated_one_and_measured_channels_set_it(simulated,
-                                                                          monkeypatch):
+def test_a_rig_window_lies_inside_the_simulated_one_and_narrows_the_measured_channels(
+        simulated, monkeypatch):
     folder, _, _ = simulated
     monkeypatch.chdir(folder)
-    write_rig(paper_rig(VoxelGrid.poolfire(8), n_pixels=4), folder / "rig_window.toml",
-              {"window": [668.0, 682.0]})
+    rig = paper_rig(VoxelGrid.poolfire(8), n_pixels=4)
+    write_rig(rig, folder / "rig_window.toml", {"window": [650.0, 700.0]})
     base = {"truth": {"grid": 8}, "spectrum": SPECTRUM, "rig": {"file": "rig_window.toml"}}
-    with pytest.raises(InputDataError, match="the window 668-682 cm-1 but \\[instrument\\] "
-                                             "and \\[spectrum\\] models 660-690 cm-1"):
+    with pytest.raises(InputDataError, match="rig_window.toml: camera 0: 'window' = 650-700 "
+                                             "cm-1 reaches outside the window 660-690 cm-1 "
+                                             "that \\[instrument\\] and \\[spectrum\\] models"):
         runner.build_scene(config.validate(base))
-    cfg = config.validate({**base, "data": {"source": "m.nc"}})
+    cfg = config.validate({**base, "data": {"source": "m.nc"}})  # the channels set the window
     scene = runner.build_scene(cfg, measured=runner.read_data(cfg))
     assert (scene.out_wavenumber.min(), scene.out_wavenumber.max()) == (668.0, 682.0)
+    write_rig(rig, folder / "rig_narrow.toml", [{"window": [672.0, 676.0]}, {}, {}, {}])
+    cfg = config.validate({**cfg, "rig": {"file": "rig_narrow.toml"}})
+    measured = runner.read_data(cfg)
+    assert measured.windows == ((672.0, 676.0), None, None, None)
+    per_pixel = measured.measurement.measured.sum(axis=1)  # channels every 2 cm-1
+    assert set(per_pixel[:16]) == {3} and set(per_pixel[16:]) == {8}
+    assert runner.build_scene(cfg, measured=measured).camera_windows == measured.windows
 
 
 def test_a_file_without_noise_is_reported_as_an_unweighted_misfit(simulated, tmp_path,
