@@ -73,17 +73,30 @@ def read_background(path) -> MeasuredBackground:
 
 
 def _frame_background(path: Path) -> MeasuredBackground:
-    """Per-camera mean spectrum of a measurement file, bad pixels and wavenumbers left out."""
+    """Per-camera mean spectrum of a measurement file, bad pixels and wavenumbers left out.
+
+    A wavenumber some camera does not measure (outside its own spectral window, or masked in
+    all its pixels) takes that camera's nearest measured value: the lineshape of a channel
+    near the window's edge reaches a few resolutions beyond it, where a wall's spectrum is
+    about as bright as at the edge.
+    """
     measured = read_measurement(path)
     sigma = np.broadcast_to(measured.measurement.sigma, measured.measurement.data.shape)
     good = np.isfinite(sigma)
     keep = good.any(axis=0)
+    wavenumber = measured.wavenumber[keep]
     radiance = []
-    for data, ok in zip(measured.rig.split_images(measured.measurement.data),
-                        measured.rig.split_images(good), strict=True):
-        data, ok = data.reshape(-1, data.shape[-1]), ok.reshape(-1, ok.shape[-1])
-        radiance.append(np.sum(data * ok, axis=0)[keep] / np.maximum(ok.sum(axis=0)[keep], 1))
-    return MeasuredBackground(measured.wavenumber[keep], np.array(radiance), str(path))
+    for camera, (data, ok) in enumerate(zip(measured.rig.split_images(measured.measurement.data),
+                                            measured.rig.split_images(good), strict=True)):
+        data, ok = data.reshape(-1, data.shape[-1])[:, keep], ok.reshape(-1, ok.shape[-1])[:, keep]
+        counts = ok.sum(axis=0)
+        mean = np.sum(np.where(ok, data, 0.0), axis=0) / np.maximum(counts, 1)
+        seen = counts > 0
+        if not seen.any():
+            raise InputDataError(f"{path}: camera {camera} measures no value (every pixel or "
+                                 "wavenumber masked); a background needs each camera's spectrum")
+        radiance.append(np.interp(wavenumber, wavenumber[seen], mean[seen]))
+    return MeasuredBackground(wavenumber, np.array(radiance), str(path))
 
 
 def background_from_config(section: dict) -> Background | None:

@@ -108,6 +108,43 @@ def test_a_flameless_measurement_file_is_a_background(plain, tmp_path):
     np.testing.assert_array_equal(background.wavenumber, wall.out_wavenumber)
 
 
+def test_a_flameless_frame_with_camera_windows_holds_each_camera_at_its_window_edges(
+        plain, tmp_path):
+    """A camera with its own window: its background is the frame's mean inside the window and
+    its nearest measured value outside it (never zero or NaN); the other cameras are the
+    frame's mean everywhere."""
+    wall = plain.with_background(BlackbodyWall(700.0, 0.5))
+    air = np.stack([np.full(GRID.shape, 300.0), *np.zeros((3, *GRID.shape))])
+    frame = wall.simulate(air)
+    eta = wall.out_wavenumber
+    window = (float(eta[len(eta) // 3]), float(eta[2 * len(eta) // 3]))
+    inside = (eta >= window[0]) & (eta <= window[1])
+    sigma = np.full(frame.shape, 1e-3)
+    sigma[:9, ~inside] = np.inf  # camera 0 (9 pixels) measures its window only
+    measured = MeasurementFile(Measurement(np.where(np.isfinite(sigma), frame, np.nan), sigma,
+                                           True, {}),
+                               wall.rig, eta, wall.resolution,
+                               windows=(window,) + (None,) * (wall.rig.n_cameras - 1))
+    background = read_background(write_measurement(measured, tmp_path / "frame.nc"))
+    first = frame[0]
+    expected = np.interp(eta, eta[inside], first[inside])
+    np.testing.assert_allclose(background.radiance[0], expected, rtol=1e-12)
+    assert not np.allclose(expected[~inside], first[~inside])  # the wall's spectrum changes
+    np.testing.assert_allclose(background.radiance[1:], frame[9::9], rtol=1e-12)
+
+
+def test_a_flameless_frame_with_a_camera_that_measures_nothing_is_refused(plain, tmp_path):
+    wall = plain.with_background(BlackbodyWall(700.0, 0.5))
+    air = np.stack([np.full(GRID.shape, 300.0), *np.zeros((3, *GRID.shape))])
+    frame = wall.simulate(air)
+    sigma = np.full(frame.shape, 1e-3)
+    sigma[9:18] = np.inf  # every pixel of camera 1 bad
+    measured = MeasurementFile(Measurement(frame, sigma, True, {}), wall.rig,
+                               wall.out_wavenumber, wall.resolution)
+    with pytest.raises(InputDataError, match=r"frame\.nc: camera 1 measures no value"):
+        read_background(write_measurement(measured, tmp_path / "frame.nc"))
+
+
 def test_background_and_soot_on_two_devices_equal_one_device(script_report):
     """The sharded map splits the sub-rays' cameras with the rays and replicates the
     backgrounds and the soot (run in a fresh process with two forced CPU devices)."""
