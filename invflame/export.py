@@ -206,8 +206,25 @@ def write_netcdf(fields: dict[str, Field], path, attributes: dict | None = None)
     pathlib.Path
         The path written.
     """
-    dataset = fields_dataset(fields, attributes)
+    return write_dataset(fields_dataset(fields, attributes), path)
 
+
+def write_dataset(dataset: xr.Dataset, path) -> Path:
+    """Write a dataset of voxel variables (as from :func:`fields_dataset`) to a NetCDF-4 file,
+    atomically: variables compressed, none with a ``_FillValue``.
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        Variables over ``(z, y, x)`` and the coordinates of :func:`fields_dataset`.
+    path : str or os.PathLike
+        Destination (``.nc``); parent folders are created.
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+    """
     def write(temporary: Path) -> Path:
         # compressed fields; no value is missing anywhere, coordinates and bounds included
         encoding = {name: {"zlib": True, "complevel": 4, "_FillValue": None}

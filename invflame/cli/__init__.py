@@ -33,11 +33,13 @@ from invflame.cli import (
     reproduce,
     rig,
     sweep,
+    uncertainty,
 )
 from invflame.errors import InvflameError
 from invflame.process_memory import configure_malloc
 
-COMMANDS = [reproduce, experiment, config, export, sweep, demo, phantom, lines, co2, rig]
+COMMANDS = [reproduce, experiment, config, export, uncertainty, sweep, demo, phantom, lines, co2,
+            rig]
 
 
 def build_parser() -> argparse.ArgumentParser:

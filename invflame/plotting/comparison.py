@@ -9,7 +9,6 @@ MSE) in its title and one colour bar per quantity under its columns.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from pathlib import Path
 
 import matplotlib
 
@@ -19,6 +18,7 @@ import numpy as np  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
 
 from invflame.field import Field  # noqa: E402
+from invflame.plotting import save_figure
 from invflame.plotting.fields import (  # noqa: E402
     AXIS_NAMES,
     COLORMAPS,
@@ -111,14 +111,6 @@ def _panel_grid(grid, rows: Sequence[str], quantities: Sequence[str],
     return fig
 
 
-def _save(fig, path, dpi: int):
-    if path is not None:
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path, dpi=dpi)
-    return fig
-
-
 def _score_title(scores: Mapping[str, Mapping[str, float]] | None, row: str,
                  quantity: str) -> str:
     value = (scores or {}).get(row, {}).get(quantity)
@@ -189,7 +181,7 @@ def plot_comparison(truth: Field, estimates: Mapping[str, Field],
             f"; white lines: isotherms {min(isotherms):.0f}–{max(isotherms):.0f} K"
             if len(isotherms) else "") + "; MSE: normalized MSE of the field over the domain",
         width, dpi)
-    return _save(fig, path, dpi)
+    return save_figure(fig, path, dpi)
 
 
 def plot_errors(truth: Field, estimates: Mapping[str, Field],
@@ -247,4 +239,4 @@ def plot_errors(truth: Field, estimates: Mapping[str, Field],
         f"estimate − truth on the mid-planes (red: too high, blue: too low); black line: the "
         f"truth's {FLAME_EDGE:.0f} K isotherm; MSE: normalized MSE of the field over the domain",
         width, dpi)
-    return _save(fig, path, dpi)
+    return save_figure(fig, path, dpi)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from pathlib import Path
 
 import matplotlib
 
@@ -12,6 +11,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from invflame.field import FIELD_NAMES, Field  # noqa: E402
+from invflame.plotting import save_figure
 
 ISOTHERMS = tuple(float(t) for t in range(500, 1600, 100))
 """Default temperature isocontours in K: every 100 K from 500 to 1500 K."""
@@ -145,8 +145,4 @@ def plot_fields(
             f"mid-plane cutaways; white lines: isotherms {min(isotherms):.0f}–"
             f"{max(isotherms):.0f} K", fontsize=9,
         )
-    if path is not None:
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path, dpi=dpi)
-    return fig
+    return save_figure(fig, path, dpi)

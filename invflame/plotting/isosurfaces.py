@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 
 import matplotlib
 
@@ -16,6 +15,7 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 from skimage.measure import marching_cubes  # noqa: E402
 
 from invflame.field import Field  # noqa: E402
+from invflame.plotting import save_figure
 from invflame.plotting.fields import AXIS_NAMES, ISOTHERMS  # noqa: E402
 
 _TITLE_INCHES = 0.5  # room above each panel for a title of up to three lines
@@ -167,8 +167,4 @@ def plot_isotherms_3d(fields: Mapping[str, Field], path=None,
     bar.set_label("isotherm T [K]; every panel shows the whole grid, a quarter of it cut away",
                   fontsize=8)
     bar.ax.tick_params(labelsize=7)
-    if path is not None:
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path, dpi=dpi)
-    return fig
+    return save_figure(fig, path, dpi)

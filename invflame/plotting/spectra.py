@@ -4,7 +4,6 @@ image, for a rig of any cameras (each with its own pixel counts and spectral win
 from __future__ import annotations
 
 from itertools import pairwise
-from pathlib import Path
 
 import matplotlib
 
@@ -13,6 +12,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from invflame.geometry import CameraRig  # noqa: E402
+from invflame.plotting import save_figure
 
 _IMAGE_INCHES = 2.4  # width of one camera's column of images
 _SPECTRUM_INCHES = 5.0  # width of the spectrum panel
@@ -142,11 +142,7 @@ def plot_spectrum_and_images(wavenumber, measured, simulated, rig: CameraRig,
             ax.set(xticks=[], yticks=[])
             panels.append(ax)
     fig.colorbar(shown_image, ax=panels, label="band radiance [W/(m²·sr)]", shrink=0.8)
-    if path is not None:
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path, dpi=dpi)
-    return fig
+    return save_figure(fig, path, dpi)
 
 
 def _channels_text(channels: np.ndarray) -> str:
