@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from invflame.atomic_files import read_npz, write_npz
+from invflame.errors import InputDataError
 from invflame.geometry import VoxelGrid
 
 FIELD_NAMES = ("T", "CO2", "H2O", "CH4")
@@ -262,30 +263,32 @@ class Field:
 
         Raises
         ------
-        ValueError
-            If the file lacks an entry, has other field names, or fails validation;
+        InputDataError
+            If the file lacks an entry, has other field names, a grid that is no grid,
+            metadata that are not JSON, or fails validation (the message names the path);
             :class:`~invflame.atomic_files.CorruptFileError` if it is truncated or not an
-            ``.npz`` (the message names the path).
+            ``.npz``. Both are ``ValueError``.
         """
         data = read_npz(path, "field file", "write it again (rerun what made it)")
         missing = {"values", "names", "lower", "upper", "shape", "up_axis"} - set(data)
         if missing:
-            raise ValueError(f"{path} is not an invflame field file: missing {sorted(missing)}")
+            raise InputDataError(f"{path} is not an invflame field file: missing "
+                                 f"{sorted(missing)}")
         names = tuple(str(n) for n in data["names"])
         if names not in (FIELD_NAMES, SOOTY_FIELD_NAMES):
-            raise ValueError(f"{path} holds fields {names}; expected {FIELD_NAMES}, or "
-                             f"{SOOTY_FIELD_NAMES} with soot")
-        grid = VoxelGrid(
-            data["lower"],
-            data["upper"],
-            tuple(int(n) for n in data["shape"]),
-            up_axis=int(data["up_axis"]),
-        )
-        meta = json.loads(str(data["metadata"])) if "metadata" in data else {}
+            raise InputDataError(f"{path} holds fields {names}; expected {FIELD_NAMES}, or "
+                                 f"{SOOTY_FIELD_NAMES} with soot, in that order")
         try:
+            meta = json.loads(str(data["metadata"])) if "metadata" in data else {}
+        except json.JSONDecodeError as err:
+            raise InputDataError(f"{path}: entry 'metadata' is not JSON ({err}); write it with "
+                                 "json.dumps of a dict, or leave it out") from None
+        try:
+            grid = VoxelGrid(data["lower"], data["upper"], tuple(int(n) for n in data["shape"]),
+                             up_axis=int(data["up_axis"]))
             return cls(grid, data["values"], meta)
-        except ValueError as err:
-            raise ValueError(f"{path}: {err}") from err
+        except (TypeError, ValueError) as err:
+            raise InputDataError(f"{path}: {err}") from None
 
 
 def hot_extent(field: Field, threshold: float) -> tuple[np.ndarray | None, np.ndarray | None]:

@@ -39,6 +39,13 @@ def write_atomic(path, write) -> Path:
     -------
     Path
         ``path``.
+
+    Raises
+    ------
+    OSError
+        If the system refuses a step (no space, no permission); one that names no file (a
+        full disk found at the flush) is raised again naming ``path``. The file that was at
+        ``path`` is left as it was.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -52,6 +59,11 @@ def write_atomic(path, write) -> Path:
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates the file private (0600)
         os.replace(tmp, path)
+    except OSError as err:
+        Path(tmp).unlink(missing_ok=True)
+        if err.filename or not err.errno:
+            raise
+        raise OSError(err.errno, err.strerror, str(path)) from err
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise

@@ -27,6 +27,33 @@ from solvers.problem import Evaluation
 
 FORMAT = "invflame-solver-checkpoint/1"
 _STATE = "state."
+_FIX = "delete it and start the run again without resuming"
+HEADER = ("solver", "options", "seed", "iteration", "problem", "dims", "dtype", "elapsed",
+          "history", "current")
+"""The entries of the JSON header of a run's checkpoint (:func:`save_run`) besides
+``format``."""
+
+
+class CheckpointMismatchError(ValueError):
+    """A readable checkpoint written by another solver, with other options or for another
+    problem than the run that would resume from it.
+
+    Parameters
+    ----------
+    fact : str
+        What differs, naming the file.
+    advice : str
+        What to do; the message is ``"{fact}; {advice}"``.
+
+    Attributes
+    ----------
+    fact : str
+        What differs, for a caller that gives its own advice.
+    """
+
+    def __init__(self, fact: str, advice: str):
+        super().__init__(f"{fact}; {advice}")
+        self.fact = fact
 
 
 @dataclass
@@ -108,14 +135,13 @@ def load_checkpoint(path) -> CheckpointData:
         If it is a readable ``.npz`` of another format.
     """
     path = Path(path)
-    fix = "delete it and start the run again without resuming"
-    arrays = read_npz(path, "checkpoint", fix)
+    arrays = read_npz(path, "checkpoint", _FIX)
     try:
         meta = json.loads(str(arrays["meta"]))
         x = arrays["x"]
     except (KeyError, json.JSONDecodeError) as err:
         raise CorruptFileError(f"checkpoint {path} lacks its header or parameters ({err}); "
-                               f"{fix}") from err
+                               f"{_FIX}") from err
     if not isinstance(meta, dict) or meta.get("format") != FORMAT:
         found = meta.get("format") if isinstance(meta, dict) else None
         raise ValueError(f"{path} is not a solver checkpoint (format {found!r}, expected "
@@ -149,6 +175,22 @@ def save_run(path, run) -> Path:
     return save_checkpoint(path, meta, run.x, grad, run.solver.state_to_arrays(run))
 
 
+def read_run(path) -> CheckpointData:
+    """Read a checkpoint written by :func:`save_run`, its header complete.
+
+    Raises
+    ------
+    FileNotFoundError, CorruptFileError, ValueError
+        As :func:`load_checkpoint`; :class:`CorruptFileError` also if the header lacks an
+        entry of :data:`HEADER` (the message names the file and the entries).
+    """
+    ck = load_checkpoint(path)
+    missing = [key for key in HEADER if key not in ck.meta]
+    if missing:
+        raise CorruptFileError(f"checkpoint {path} lacks the header entries {missing}; {_FIX}")
+    return ck
+
+
 def load_run(path, solver, problem) -> CheckpointData:
     """Read a checkpoint to resume ``solver`` on ``problem`` from it.
 
@@ -164,23 +206,28 @@ def load_run(path, solver, problem) -> CheckpointData:
 
     Raises
     ------
-    ValueError
+    FileNotFoundError, CorruptFileError, ValueError
+        As :func:`read_run`.
+    CheckpointMismatchError
         If the checkpoint was written by another solver, with other options (each changed
         option is named with both values) or for parameters of another shape.
     """
-    ck = load_checkpoint(path)
+    ck = read_run(path)
     meta = ck.meta
     if meta["solver"] != solver.name:
-        raise ValueError(f"checkpoint {path} was written by solver {meta['solver']!r}, "
-                         f"not {solver.name!r}; resume with solvers.get({meta['solver']!r})")
+        raise CheckpointMismatchError(
+            f"checkpoint {path} was written by solver {meta['solver']!r}, not {solver.name!r}",
+            f"resume with solvers.get({meta['solver']!r}), or start a new run")
     saved, now = meta["options"], normalize(solver.options.as_dict())
     changed = [f"{k}: {saved.get(k)!r} in the checkpoint, {now.get(k)!r} now"
                for k in sorted(set(saved) | set(now)) if saved.get(k) != now.get(k)]
     if changed:
-        raise ValueError(f"checkpoint {path} was written with other options of solver "
-                         f"{solver.name!r} ({'; '.join(changed)}); resume with the same "
-                         "options, or start a new run")
+        raise CheckpointMismatchError(
+            f"checkpoint {path} was written with other options of solver {solver.name!r} "
+            f"({'; '.join(changed)})", "resume with the same options, or start a new run")
     if tuple(meta["dims"]) != problem.dims:
-        raise ValueError(f"checkpoint {path} holds parameters of shape {tuple(meta['dims'])}, "
-                         f"the problem's are {problem.dims}")
+        raise CheckpointMismatchError(
+            f"checkpoint {path} holds parameters of shape {tuple(meta['dims'])}, the "
+            f"problem's are {problem.dims}",
+            "resume on the problem it was written for, or start a new run")
     return ck

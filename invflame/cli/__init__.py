@@ -8,8 +8,9 @@ freed blocks, so that arrays freed by one thread are reused by the others withou
 afresh (:func:`invflame.process_memory.configure_malloc`).
 
 Bad input (:class:`invflame.errors.InvflameError`, a damaged or missing file) ends the command
-with its message on stderr and exit status 2, without a traceback; ``--debug`` shows the
-traceback.
+with its message on stderr and exit status 2, without a traceback; so does a file the system
+refuses to write (a full disk, no permission, a read-only file system), named with the
+system's reason. ``--debug`` shows the traceback.
 
 Building the parser imports no array library: ``invflame --help``, ``invflame --version`` and
 ``invflame COMMAND --help`` answer at once. A command imports what it computes with (JAX,
@@ -19,6 +20,7 @@ torch, the operators) inside the function that runs it.
 from __future__ import annotations
 
 import argparse
+import errno
 import sys
 
 from invflame import __version__
@@ -70,6 +72,25 @@ def bad_input_errors() -> tuple[type[Exception], ...]:
             IsADirectoryError)
 
 
+REFUSED = {errno.ENOSPC: "free space on its disk", errno.EDQUOT: "free space in your quota",
+           errno.EACCES: "change its permissions", errno.EPERM: "change its permissions",
+           errno.EROFS: "use a writable disk"}
+"""System errors that refuse a file to this process (a full disk or quota, no permission, a
+read-only file system) → what to do about it."""
+
+
+def error_lines(err: Exception) -> list[str] | None:
+    """The lines :func:`main` prints for ``err``: one per error of a configuration, one for
+    other bad input (:func:`bad_input_errors`) or a file the system refused (:data:`REFUSED`,
+    named with the system's reason); None for an error that is not the input's fault."""
+    if isinstance(err, bad_input_errors()):
+        return [str(message) for message in getattr(err, "messages", [err])]
+    if isinstance(err, OSError) and err.errno in REFUSED:
+        return [f"{err.filename or 'a file'}: {err.strerror}: {REFUSED[err.errno]}, or write "
+                "elsewhere"]
+    return None
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``invflame`` command; returns the process exit code (2 for bad
     input, whose message goes to stderr)."""
@@ -77,11 +98,12 @@ def main(argv: list[str] | None = None) -> int:
     configure_malloc()  # long runs: memory that does not creep, no page faults (module notes)
     try:
         return int(args.func(args) or 0)
-    except bad_input_errors() as err:  # evaluated only when the command raised
-        if args.debug:
+    except (*bad_input_errors(), OSError) as err:  # evaluated only when the command raised
+        lines = error_lines(err)
+        if args.debug or lines is None:
             raise
-        for message in getattr(err, "messages", [err]):  # a configuration's errors: a line each
-            print(f"invflame {args.command}: error: {message}", file=sys.stderr)
+        for line in lines:
+            print(f"invflame {args.command}: error: {line}", file=sys.stderr)
         return 2
 
 

@@ -92,9 +92,9 @@ def run_command(args: argparse.Namespace) -> int:
     check_run_target(args.out, resume=args.resume, overwrite=args.overwrite)
     summary = run_experiment(configuration.load(args.config), args.out, resume=args.resume,
                              progress=not args.quiet, force=args.force)
-    if summary.get("diverged"):
-        print(f"the solver diverged ({summary['stop_reason']}): the results hold the iterate "
-              "before; lower the step size or learning rate in solver.options")
+    if summary.get("diverged"):  # the reason says what to do
+        kept = "the start" if summary["iterations"] == 0 else "the iterate before"
+        print(f"the solver stopped ({summary['stop_reason']}): the results hold {kept}")
     if "mse" in summary:  # scored against a ground truth
         comparison_figures(args.out, {"reconstruction": args.out})
         print(f"normalized MSE: {summary['mse']}; results in {args.out}")

@@ -31,10 +31,13 @@ file), or a peak signal-to-noise ratio instead.
 
 from __future__ import annotations
 
+import io
+import warnings
 from pathlib import Path
 
 import numpy as np
 
+from invflame.errors import InputDataError
 from invflame.field import Field
 from invflame.measurement import Measurement
 from invflame.representations.whitening import noise_weights
@@ -55,27 +58,49 @@ def read_nesr(path, out_wavenumber) -> np.ndarray:
         W/(m²·sr·cm⁻¹); lines starting with ``#`` are comments.
     out_wavenumber : array_like
         Output grid in cm⁻¹; the file must cover it. Linear interpolation in between.
+
+    Returns
+    -------
+    ndarray, shape (n_out,)
+        NESR in W/(m²·sr·cm⁻¹) at each output wavenumber.
+
+    Raises
+    ------
+    FileNotFoundError
+        If there is no file at ``path``.
+    InputDataError
+        If it is not UTF-8 text of two numeric columns and at least two rows, its wavenumbers
+        do not increase, an NESR is not a finite positive number, or it does not cover
+        ``out_wavenumber``; the message names the file and the first bad row.
     """
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"noise.nesr file not found: {path} (give a number in "
                                 "W/(m2 sr cm-1) or a file of 'wavenumber NESR' rows)")
+    layout = "rows of 'wavenumber NESR' (cm-1, W/(m2 sr cm-1))"
     try:
-        table = np.loadtxt(path, delimiter=None if "," not in path.read_text() else ",",
-                           ndmin=2)
-    except ValueError as err:
-        raise ValueError(f"{path}: not a table of 'wavenumber NESR' rows: {err}") from None
+        text = path.read_text(encoding="utf-8")
+        with warnings.catch_warnings():  # an empty file: said below, as for a short one
+            warnings.simplefilter("ignore", UserWarning)
+            table = np.loadtxt(io.StringIO(text), delimiter="," if "," in text else None,
+                               ndmin=2)
+    except (UnicodeDecodeError, ValueError) as err:
+        raise InputDataError(f"{path}: cannot be read as UTF-8 {layout}: {err}") from None
     if table.shape[1] != 2 or table.shape[0] < 2:
-        raise ValueError(f"{path}: need at least 2 rows of 2 columns (wavenumber cm-1, NESR "
-                         f"W/(m2 sr cm-1)); got shape {table.shape}")
+        raise InputDataError(f"{path}: need at least 2 {layout}; got {table.shape[0]} rows of "
+                             f"{table.shape[1] if table.size else 0} columns")
     eta, nesr = table.T
-    if np.any(np.diff(eta) <= 0) or np.any(~np.isfinite(table)) or np.any(nesr <= 0):
-        raise ValueError(f"{path}: wavenumbers must increase and NESR values be finite and "
-                         "positive")
+    for bad, what in ((~np.isfinite(table).all(axis=1), "a value that is not a finite number"),
+                      (nesr <= 0, "an NESR that is not positive"),
+                      (np.r_[False, np.diff(eta) <= 0], "a wavenumber not above the row before")):
+        if bad.any():
+            row = int(np.argmax(bad))
+            raise InputDataError(f"{path}: data row {row + 1} ({eta[row]:g} {nesr[row]:g}) holds "
+                                 f"{what}; give {layout} with wavenumbers increasing")
     out = np.asarray(out_wavenumber, dtype=np.float64)
     if out.min() < eta[0] or out.max() > eta[-1]:
-        raise ValueError(f"{path}: covers {eta[0]:g}-{eta[-1]:g} cm-1 but the instrument "
-                         f"samples {out.min():g}-{out.max():g} cm-1")
+        raise InputDataError(f"{path}: covers {eta[0]:g}-{eta[-1]:g} cm-1 but the instrument "
+                             f"samples {out.min():g}-{out.max():g} cm-1")
     return np.interp(out, eta, nesr)
 
 

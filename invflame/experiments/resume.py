@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -14,13 +16,15 @@ import numpy as np
 import invflame
 import solvers
 from invflame.atomic_files import read_json
+from invflame.errors import InputDataError
 from invflame.experiments import config as configuration
 from invflame.experiments.run_folder import CHECKPOINT, FINGERPRINT, SUMMARY
 from invflame.field import Field
 from invflame.measurement import Measurement
 
 __all__ = ["FINGERPRINT", "FORCE_HINT", "check_fingerprint", "check_resumable",
-           "continues_finished_run", "resumed_from", "run_fingerprint"]
+           "checkpoint_of_this_run", "continues_finished_run", "resumed_from",
+           "run_fingerprint"]
 
 FORCE_HINT = "; --force (invflame run --resume --force) continues anyway and records it"
 
@@ -136,15 +140,32 @@ def resumed_from(cfg: dict, folder, per_epoch: int, changed: list[str]) -> dict:
     ConfigError
         If ``solver.iterations`` is below the epochs of the checkpoint (the run would stop at
         once, past its own limit).
+    CorruptFileError
+        If the checkpoint is damaged or its header lacks an entry
+        (:func:`solvers.checkpoint.read_run`).
     """
     solver = cfg["solver"]
-    checkpoint = solvers.load_checkpoint(Path(folder) / CHECKPOINT)
+    checkpoint = solvers.checkpoint.read_run(Path(folder) / CHECKPOINT)
     done = checkpoint.meta["iteration"]
     if done > solver["iterations"] * per_epoch:
         raise _below_done(folder, done / per_epoch, solver["iterations"])
     exact = solvers.get(solver["name"]).resumes_exactly(checkpoint.state)
     return {"from_iteration": done, "exact": exact,
             "forced": bool(changed), "changed": changed}
+
+
+@contextmanager
+def checkpoint_of_this_run(folder) -> Iterator[None]:
+    """Run the solver resuming from the checkpoint of the run folder ``folder`` inside this
+    context: a checkpoint that another solver, other options or another grid wrote (a file
+    copied from another run) becomes an :class:`~invflame.errors.InputDataError` naming it and
+    saying to start the run again.
+    """
+    try:
+        yield
+    except solvers.checkpoint.CheckpointMismatchError as err:
+        raise InputDataError(f"{err.fact}: it belongs to another run; start this one again "
+                             f"(invflame run --overwrite --out {folder})") from None
 
 
 def _content_hash(*arrays) -> str:

@@ -51,27 +51,48 @@ logger = logging.getLogger(__name__)
 
 def check_output_folder(path) -> Path:
     """``path`` as a :class:`~pathlib.Path` if it can be an output folder (a folder, or
-    nothing yet), without creating it.
+    nothing yet, under a folder this process may write in), without creating it.
 
     Raises
     ------
     OutputError
-        If ``path`` or one of its parents exists and is not a folder.
+        If ``path`` or one of its parents exists and is not a folder, is a link to nothing,
+        or if the nearest existing one is a folder this process may not write in.
     """
     path = Path(path)
     for folder in (path, *path.parents):
+        where = "" if folder == path else f" lies under {folder}, which"
+        if folder.is_symlink() and not folder.exists():
+            raise OutputError(f"output folder {path}{where} is a link to {os.readlink(folder)}, "
+                              "which does not exist: create that folder, or give another --out")
         if folder.exists() and not folder.is_dir():
             where = "is a file" if folder == path else f"lies under the file {folder}"
             raise OutputError(f"output folder {path} {where}: give a folder path (--out DIR) "
                               "that is a folder or does not exist yet")
+        if folder.exists():
+            if not os.access(folder, os.W_OK | os.X_OK):
+                raise OutputError(f"output folder {path}{where} is a folder this user may not "
+                                  "write in: give another --out, or make it writable")
+            return path
     return path
 
 
 def output_folder(path) -> Path:
     """Create the output folder ``path`` (and its parents) after
-    :func:`check_output_folder`; returns it as a :class:`~pathlib.Path`."""
+    :func:`check_output_folder`; returns it as a :class:`~pathlib.Path`.
+
+    Raises
+    ------
+    OutputError
+        As :func:`check_output_folder`, or if the system refuses to create the folder (the
+        message gives its reason).
+    """
     path = check_output_folder(path)
-    path.mkdir(parents=True, exist_ok=True)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise OutputError(f"output folder {path} cannot be created ({err.strerror}): give "
+                          "another --out") from None
     return path
 
 
@@ -254,10 +275,14 @@ class RunLock:
             os.unlink(mine)
         if not (self.folder / INCOMPLETE).exists():
             self._finished = _summary_stamp(self.folder)
-        write_text(self.folder / INCOMPLETE,
-                   "The outputs in this folder are partial: a run is writing them, or it was "
-                   "interrupted. Continue it with invflame run --resume, or run it again with "
-                   "--overwrite.\n")
+        try:
+            write_text(self.folder / INCOMPLETE,
+                       "The outputs in this folder are partial: a run is writing them, or it "
+                       "was interrupted. Continue it with invflame run --resume, or run it "
+                       "again with --overwrite.\n")
+        except BaseException:  # a full disk: the lock is not left behind
+            self.lock.unlink()
+            raise
         return self
 
     def _take_over_if_stale(self) -> None:

@@ -89,6 +89,7 @@ from invflame.experiments.resume import (
     FORCE_HINT,
     check_fingerprint,
     check_resumable,
+    checkpoint_of_this_run,
     continues_finished_run,
     resumed_from,
     run_fingerprint,
@@ -114,10 +115,10 @@ __all__ = ["CHECKPOINT_EVERY", "CHECKPOINT_SECONDS", "FINGERPRINT", "FORCE_HINT"
            "starting_parameters", "truth_scores", "widened_window"]
 
 CHECKPOINT_EVERY = 10
-#: A checkpoint is written every :data:`CHECKPOINT_EVERY` iterations once this many seconds
-#: (wall clock) have passed since the last: a killed run loses at most about that much work,
-#: and a run of fast iterations (a voxel epoch on a GPU takes under 50 ms) does not spend its
-#: time writing checkpoints.
+#: A checkpoint is written every :data:`CHECKPOINT_EVERY` iterations once this many seconds (wall
+#: clock) have passed since the last: a killed run loses at most about that much work, and fast
+#: iterations (a voxel epoch on a GPU takes under 50 ms) do not spend their time writing
+#: checkpoints.
 CHECKPOINT_SECONDS = 10.0
 
 
@@ -334,8 +335,7 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
         clock.lap("choice of lambda")
     problem = configured_problem(cfg, scene, representation, measurement, reg["lambda"], x0)
     per_epoch = representation.iterations_per_epoch
-    callbacks = [solvers.Checkpoint(checkpoint, every=CHECKPOINT_EVERY,
-                                    seconds=CHECKPOINT_SECONDS)]
+    callbacks = [solvers.Checkpoint(checkpoint, every=CHECKPOINT_EVERY, seconds=CHECKPOINT_SECONDS)]
     if progress:
         callbacks.append(solvers.ProgressBar(desc=out.name))
     resume_from = checkpoint if resume and checkpoint.is_file() else None
@@ -343,9 +343,10 @@ def _write_run(cfg: dict, out: Path, resume: bool, progress: bool, table, measur
     log(f"solver {solver['name']} for at most {solver['iterations']} epochs"
         + (f" ({per_epoch} iterations each)" if per_epoch > 1 else "")
         + (f", resuming from {checkpoint.name}" if resume_from else ""))
-    result = solvers.solve(problem, solver["name"], max_iter=solver["iterations"] * per_epoch,
-                           callbacks=callbacks, seed=cfg["seed"], resume=resume_from,
-                           **solver_options(cfg, measurement))
+    with checkpoint_of_this_run(out):
+        result = solvers.solve(problem, solver["name"], max_iter=solver["iterations"] * per_epoch,
+                               callbacks=callbacks, seed=cfg["seed"], resume=resume_from,
+                               **solver_options(cfg, measurement))
     clock.lap("solve")
     log(str(result))
 

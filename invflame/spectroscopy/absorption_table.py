@@ -224,7 +224,9 @@ class AbsorptionTable(AbsorptionCoefficient):
         :data:`~.table_inputs.TABLE_VERSION`; it
         holds that key and a hash of its own arrays. A cache file that is damaged (empty,
         truncated, garbage), holds another key or fails its hash is rebuilt, with a warning
-        naming it on the ``invflame.spectroscopy.absorption_table`` logger.
+        naming it on the ``invflame.spectroscopy.absorption_table`` logger; where the cache
+        cannot be written (the folder cannot be made, no space, no permission) the table built
+        is returned uncached, with a warning naming the file and the reason.
         """
         species, wavenumber, temperatures, fractions = resolve(
             linelists, species, wavenumber, temperatures, self_fraction
@@ -240,7 +242,12 @@ class AbsorptionTable(AbsorptionCoefficient):
         fractions = dict(zip(species, fractions, strict=True))
         table = cls.build(linelists, wavenumber, temperatures, pressure, species, fractions,
                           progress, subdivision)
-        table.save(path, key=key)
+        try:
+            table.save(path, key=key)
+        except OSError as err:
+            logger.warning("the absorption table is used without being cached: %s cannot be "
+                           "written (%s); set INVFLAME_CACHE to a writable folder", path,
+                           err.strerror)
         return table
 
     @classmethod

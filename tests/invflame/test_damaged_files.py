@@ -2,13 +2,16 @@
 files, checkpoints, absorption tables, run folders; each raises naming the file or the field
 that is wrong, and a file that was there is left as it was."""
 
+import errno
+import json
 import os
 from importlib import resources
 
 import numpy as np
 import pytest
 
-from invflame.atomic_files import write_npz
+from invflame.atomic_files import write_npz, write_text
+from invflame.errors import InputDataError
 from invflame.experiments import config, runner
 from invflame.experiments.run_folder import LOCK, RunLock
 from invflame.field import Field
@@ -16,7 +19,7 @@ from invflame.geometry import VoxelGrid
 from invflame.phantoms import synthetic_plume
 from invflame.spectroscopy.absorption_table import AbsorptionTable
 from invflame.spectroscopy.linelist import read_par
-from solvers.checkpoint import load_checkpoint
+from solvers.checkpoint import HEADER, load_checkpoint, read_run, save_checkpoint
 
 RECORD = (resources.files("invflame") / "data" / "H2O_HITRAN2012_600-800.par").read_text(
     ).splitlines()[0]
@@ -74,6 +77,37 @@ def test_a_missing_line_list_is_named(tmp_path):
         read_par(tmp_path / "none.par")
 
 
+def field_file(work, **changes):
+    """The synthetic plume on :data:`GRID` saved as ``f.npz``, its entries changed as given."""
+    path = synthetic_plume(GRID).save(work / "f.npz")
+    stored = dict(np.load(path))
+    stored.update(changes)
+    np.savez(path, **stored)
+    return path
+
+
+@pytest.mark.parametrize(("changes", "match"), [
+    ({"names": np.array(["CO2", "T", "H2O", "CH4"])},
+     r"holds fields \('CO2', 'T', 'H2O', 'CH4'\); expected \('T', 'CO2', 'H2O', 'CH4'\)"),
+    ({"metadata": np.array("{not json")}, "entry 'metadata' is not JSON"),
+    ({"values": np.zeros((4, 3, 8, 8))}, r"field values must have shape \(4, 8, 8, 8\)"),
+    ({"shape": np.array([8, 8])}, "shape must be three positive integers"),
+    ({"values": np.full((4, 8, 8, 8), np.nan)}, "NaN or inf"),
+], ids=["reordered names", "metadata not JSON", "values of another shape", "2-D grid",
+        "NaN"])
+def test_a_field_file_of_bad_content_is_named(tmp_path, changes, match):
+    path = field_file(tmp_path, **changes)
+    with pytest.raises(InputDataError, match=match) as err:
+        Field.load(path)
+    assert str(err.value).startswith(str(path))
+
+
+def checkpoint_without(work, key):
+    """A run's checkpoint whose header lacks ``key``."""
+    meta = {entry: 0 for entry in HEADER if entry != key}
+    return save_checkpoint(work / "checkpoint.npz", meta, np.zeros(3), None, {})
+
+
 CASES = {
     "Field.load empty": (lambda w: Field.load(written(w, "f.npz", b"")), "f.npz"),
     "Field.load truncated": (lambda w: Field.load(truncated_field(w)), "f.npz"),
@@ -94,6 +128,9 @@ CASES = {
     "absorption table without lines": (lambda w: AbsorptionTable.build(
         {"H2O": par_file(w, RECORD + "\n")}, wavenumber=900.0 + 0.1 * np.arange(11),
         temperatures=[300.0, 1000.0]), "900"),
+    "checkpoint without its iteration": (lambda w: read_run(checkpoint_without(w, "iteration")),
+                                         r"checkpoint .*checkpoint.npz lacks the header "
+                                         r"entries \['iteration'\]; delete it"),
 }
 """Case → ``(call, match)``: ``call(folder)`` must raise a message that ``match`` finds."""
 
@@ -117,3 +154,18 @@ def test_writing_under_a_file_is_refused_and_the_file_kept(tmp_path):
     with pytest.raises(Exception, match="file"):
         write_npz(tmp_path / "file" / "x.npz", a=np.ones(2))
     assert (tmp_path / "file").read_text() == "results of another day\n"
+
+
+def test_a_full_disk_is_named_with_the_file_and_the_file_kept(tmp_path, monkeypatch):
+    """A disk that fills up while a file is written (found at the flush to disk)."""
+    path = write_text(tmp_path / "summary.json", json.dumps({"kept": True}))
+
+    def full(fd):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(os, "fsync", full)
+    with pytest.raises(OSError, match="No space left on device") as err:
+        write_text(path, "{}")
+    assert err.value.errno == errno.ENOSPC and err.value.filename == str(path)
+    assert json.loads(path.read_text()) == {"kept": True}
+    assert list(tmp_path.iterdir()) == [path]  # no temporary file left

@@ -3,16 +3,21 @@ anything is computed, with exit status 2, no traceback and one ``error:`` line n
 argument or file, and no file that was there before is changed; ``config.validate`` raises
 naming the key."""
 
+import errno
 import os
 import tomllib
 
+import numpy as np
 import pytest
 
 from invflame.cli import main
 from invflame.errors import ConfigError
-from invflame.experiments import config
+from invflame.experiments import config, runner
 from invflame.experiments.config import NON_NEGATIVE, POSITIVE
+from invflame.experiments.run_folder import INCOMPLETE, LOCK
 from invflame.spectroscopy.absorption_table import AbsorptionTable
+
+from ..experiments.test_config_checks import field_file
 
 SECTIONS = {"truth": ['source = "synthetic"', "grid = 8"], "rig": ["pixels = 4"],
             "spectrum": ["min = 660.0", "max = 700.0", "step = 0.1"],
@@ -246,3 +251,76 @@ def test_lines_plot_refuses_a_slab_the_table_cannot_give(refused, monkeypatch, t
                                                          names):
     monkeypatch.setattr(AbsorptionTable, "default", classmethod(lambda cls: table))
     refused(["lines", "plot", "--out", "{work}/l.png", *arguments], names)
+
+
+TRUTHS = {
+    "truth at 100 K": ({"temperature": 100.0}, "holds temperatures 100-100 K, outside"),
+    "truth at 5000 K": ({"temperature": 5000.0}, "holds temperatures 5000-5000 K, outside"),
+    "truth of reordered names": ({"names": np.array(["CO2", "T", "H2O", "CH4"])},
+                                 "holds fields ('CO2', 'T', 'H2O', 'CH4')"),
+    "truth metadata not JSON": ({"metadata": np.array("{oops")},
+                                "entry 'metadata' is not JSON"),
+    "truth of another shape": ({"values": np.zeros((4, 3, 4, 4))},
+                               "field values must have shape (4, 4, 4, 4)"),
+}
+"""Case → ``(changes of the field file t.npz, words of the message)``."""
+
+
+@pytest.mark.parametrize(("changes", "words"), TRUTHS.values(), ids=TRUTHS.keys())
+def test_a_bad_truth_file_is_refused_before_a_folder_is_made(refused, tmp_path, monkeypatch,
+                                                            changes, words):
+    monkeypatch.chdir(tmp_path)
+    field_file(tmp_path / "t.npz", **changes)
+    files = {"c.toml": configuration("truth", 'source = "t.npz"')}
+    for argv in (["config", "c.toml"], ["run", "c.toml", "--out", "out", "--quiet"]):
+        refused(argv, [f"'truth.source' = 't.npz'{between}{words}"
+                       for between in (" ", ": t.npz ", ": t.npz: ")], files)
+    assert not (tmp_path / "out").exists()
+    if "outside" not in words:  # a field, but not for the absorption table
+        refused(["phantom", "info", "t.npz"], (f"t.npz {words}", f"t.npz: {words}"))
+
+
+@pytest.mark.parametrize("out", ["link", "link/run"])
+def test_out_through_a_link_to_nothing_is_refused(refused, tmp_path, out):
+    (tmp_path / "link").symlink_to(tmp_path / "gone")
+    refused(["run", "{work}/base.toml", "--out", "{work}/" + out],
+            (f"is a link to {tmp_path / 'gone'}, which does not exist",), {"base.toml": BASE})
+    assert not (tmp_path / "gone").exists()
+
+
+def test_out_in_a_folder_this_user_may_not_write_in_is_refused(refused, tmp_path, monkeypatch):
+    (tmp_path / "locked").mkdir()
+    access = os.access
+    monkeypatch.setattr(os, "access", lambda path, mode: path != tmp_path / "locked"
+                        and access(path, mode))  # as chmod 555 does for all but root
+    refused(["run", "{work}/base.toml", "--out", "{work}/locked/run"],
+            ("lies under {work}/locked, which is a folder this user may not write in",),
+            {"base.toml": BASE})
+    assert list((tmp_path / "locked").iterdir()) == []
+
+
+def test_a_folder_the_system_refuses_to_create_is_named(refused, tmp_path, monkeypatch):
+    mkdir = os.mkdir
+
+    def refuse(path, *args, **kwargs):
+        if str(path).startswith(str(tmp_path / "out")):
+            raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), str(path))
+        mkdir(path, *args, **kwargs)
+
+    monkeypatch.setattr(os, "mkdir", refuse)
+    refused(["run", "{work}/base.toml", "--out", "{work}/out", "--quiet"],
+            ("output folder {work}/out cannot be created (Permission denied)",),
+            {"base.toml": BASE})
+
+
+def test_a_disk_that_fills_up_during_a_run_is_named_and_the_folder_marked(refused, tmp_path,
+                                                                         monkeypatch):
+    def full(path, **arrays):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+
+    monkeypatch.setattr(runner, "write_npz", full)  # data.npz, written after the solver
+    refused(["run", "{work}/base.toml", "--out", "{work}/out", "--quiet"],
+            ("{work}/out/data.npz: No space left on device: free space on its disk",),
+            {"base.toml": BASE})
+    left = {p.name for p in (tmp_path / "out").iterdir()}
+    assert INCOMPLETE in left and LOCK not in left and "reconstruction.npz" in left

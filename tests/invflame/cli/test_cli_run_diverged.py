@@ -24,4 +24,4 @@ def test_adam_with_a_huge_learning_rate_is_reported_as_diverged(tmp_path, capsys
     assert summary["diverged"] and not summary["converged"] and summary["iterations"] == 0
     assert summary["stop_reason"].startswith("diverged: the loss rose from ")
     assert summary["loss"]["final"] == summary["loss"]["initial"]  # the start is kept
-    assert capsys.readouterr().out.startswith("the solver diverged (diverged: the loss rose")
+    assert capsys.readouterr().out.startswith("the solver stopped (diverged: the loss rose")

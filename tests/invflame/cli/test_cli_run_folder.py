@@ -12,6 +12,8 @@ from invflame.experiments.run_folder import INCOMPLETE, LOCK
 from invflame.geometry import VoxelGrid
 from invflame.phantoms import make_phantom
 
+from ..experiments.test_config_checks import field_file
+
 TINY = {
     "truth": {"grid": 8, "source": "synthetic"},
     "rig": {"pixels": 4},
@@ -161,6 +163,18 @@ def test_plot_and_export_name_a_damaged_file(tmp_path, capsys, command, name, co
     assert message.format(path=run / name) in err
     assert "invflame run --overwrite --out" in err or name == "summary.json"
 
+
+@pytest.mark.parametrize("command", ["plot", "export"])
+def test_plot_and_export_name_a_truth_of_reordered_fields(tmp_path, capsys, command):
+    run = tmp_path / "run"
+    run.mkdir()
+    field_file(run / "reconstruction.npz")
+    field_file(run / "truth.npz", names=np.array(["CO2", "T", "H2O", "CH4"]))
+    (run / "summary.json").write_text("{}")
+    assert main([command, str(run)]) == 2
+    assert one_error(capsys).startswith(
+        f"invflame {command}: error: {run / 'truth.npz'} holds fields ('CO2', 'T', 'H2O', "
+        "'CH4'); expected ('T', 'CO2', 'H2O', 'CH4')")
 
 
 def test_a_quiet_run_builds_its_table_without_a_bar(tmp_path, capsys, monkeypatch):

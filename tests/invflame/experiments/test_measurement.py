@@ -1,8 +1,11 @@
 """Synthetic measurements: no inverse crime, FTIR noise, and the noise-weighted misfit."""
 
+import warnings
+
 import numpy as np
 import pytest
 
+from invflame.errors import InputDataError
 from invflame.experiments import config
 from invflame.experiments.measurement import (
     add_noise,
@@ -86,18 +89,30 @@ def test_noise_kinds_give_sigma_per_wavenumber(tmp_path):
 
 
 @pytest.mark.parametrize(("text", "message"), [
-    ("650 1e-3\n", "at least 2 rows"),
-    ("650 1e-3\n640 2e-3\n", "must increase"),
-    ("650 1e-3\n700 -1\n", "positive"),
+    ("", "need at least 2 rows of 'wavenumber NESR' .*; got 0 rows"),
+    ("650 1e-3\n", "need at least 2 rows .*; got 1 rows of 2 columns"),
+    ("650 1e-3 5\n700 1e-3 5\n", "got 2 rows of 3 columns"),
+    ("650 1e-3\n640 2e-3\n", "data row 2 \\(640 0.002\\) holds a wavenumber not above the row "
+                           "before"),
+    ("650 1e-3\n700 -1\n", "data row 2 \\(700 -1\\) holds an NESR that is not positive"),
+    ("# cm-1 NESR\n650 nan\n700 1e-3\n", "data row 1 \\(650 nan\\) holds a value that is not a "
+                                        "finite number"),
     ("650 1e-3\n675 2e-3\n", "covers 650-675"),
-    ("650 abc\n700 1\n", "not a table"),
-])
+    ("650 abc\n700 1\n", "cannot be read as UTF-8 rows of 'wavenumber NESR'"),
+    (b"\xff\xfe6\x005\x000\x00", "cannot be read as UTF-8 rows"),
+], ids=["empty", "one row", "three columns", "decreasing", "negative", "NaN", "short",
+        "text", "UTF-16"])
 def test_bad_nesr_files_are_named(tmp_path, text, message):
     path = tmp_path / "nesr.txt"
-    path.write_text(text)
-    with pytest.raises(ValueError, match=message) as err:
-        read_nesr(path, [660.0, 690.0])
-    assert str(path) in str(err.value)
+    if isinstance(text, bytes):
+        path.write_bytes(text)
+    else:
+        path.write_text(text)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # numpy's note on an empty file is not a second message
+        with pytest.raises(InputDataError, match=message) as err:
+            read_nesr(path, [660.0, 690.0])
+    assert str(err.value).startswith(f"{path}: ")
     with pytest.raises(FileNotFoundError, match="noise.nesr file not found"):
         read_nesr(tmp_path / "missing.txt", [660.0])
 

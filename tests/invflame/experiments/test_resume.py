@@ -149,3 +149,42 @@ def test_resume_refuses_a_limit_below_the_iterations_done(tmp_path):
     with pytest.raises(config.ConfigError, match=refusal):
         runner.run_experiment(lower, tmp_path, resume=True, progress=False)
     assert not (tmp_path / "summary.json").exists()
+
+
+def another_grid(meta, x):
+    return dict(meta, dims=[2, 10, 10, 10]), np.zeros((2, 10, 10, 10), x.dtype)
+
+
+def another_solver(meta, x):
+    return dict(meta, solver="gd"), x
+
+
+def no_iteration(meta, x):
+    return {key: value for key, value in meta.items() if key != "iteration"}, x
+
+
+def test_resume_names_a_checkpoint_of_another_run(tmp_path, capsys):
+    """A checkpoint copied from a run of another grid or solver, or one whose header lacks its
+    iteration: one error line naming it, exit status 2, the folder's files kept."""
+    path = tmp_path / "run.toml"
+    path.write_text(config.dumps(config.validate(dict(TINY, solver=dict(TINY["solver"],
+                                                                         iterations=2)))))
+    assert main(["run", str(path), "--out", str(tmp_path / "run"), "--quiet"]) == 0
+    (tmp_path / "run" / "summary.json").unlink()  # as if killed after its last checkpoint
+    saved = solvers.load_checkpoint(tmp_path / "run" / CHECKPOINT)
+    for change, words in [
+        (another_grid, "holds parameters of shape (2, 10, 10, 10), the problem's are "
+                       "(2, 8, 8, 8): it belongs to another run; start this one again "
+                       "(invflame run --overwrite --out "),
+        (another_solver, "was written by solver 'gd', not 'adam': it belongs to another run"),
+        (no_iteration, "lacks the header entries ['iteration']; delete it"),
+    ]:
+        meta, x = change(saved.meta, saved.x)
+        save_checkpoint(tmp_path / "run" / CHECKPOINT, meta, x, saved.grad, saved.state)
+        before = (tmp_path / "run" / CHECKPOINT).read_bytes()
+        assert main(["run", str(path), "--out", str(tmp_path / "run"), "--resume",
+                     "--quiet"]) == 2
+        [line] = capsys.readouterr().err.splitlines()
+        assert line.startswith(f"invflame run: error: checkpoint {tmp_path / 'run' / CHECKPOINT}")
+        assert words in line
+        assert (tmp_path / "run" / CHECKPOINT).read_bytes() == before

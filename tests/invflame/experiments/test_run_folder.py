@@ -1,5 +1,6 @@
 """Run folders: one writer at a time, partial outputs marked, damaged outputs named."""
 
+import errno
 import logging
 import os
 import socket
@@ -61,6 +62,17 @@ def test_a_stale_lock_is_taken_over_with_a_warning(tmp_path, caplog):
 
 
 @pytest.mark.skipif(not Path("/proc/self/stat").is_file(), reason="no /proc start times")
+def test_a_full_disk_on_taking_the_lock_leaves_no_lock(tmp_path, monkeypatch):
+    def full(fd):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(os, "fsync", full)  # INCOMPLETE, the first file written whole
+    with pytest.raises(OSError, match="No space left on device") as err, RunLock(tmp_path):
+        pass
+    assert err.value.filename == str(tmp_path / INCOMPLETE)
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_a_lock_whose_process_id_was_reused_is_taken_over(tmp_path, caplog):
     started = run_folder._started(os.getpid())
     assert started.isdigit()

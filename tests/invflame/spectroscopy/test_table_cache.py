@@ -95,3 +95,19 @@ def test_a_window_without_lines_is_refused(h2o):
                                              "900-905 cm-1"):
         AbsorptionTable.build({"H2O": h2o}, wavenumber=900.0 + 0.1 * np.arange(51),
                               temperatures=NODES)
+
+
+@pytest.mark.parametrize(("cache_path", "reason"), [("a file", "File exists"),
+                                                    ("a file/sub", "Not a directory")])
+def test_a_cache_that_cannot_be_written_gives_the_table_uncached_with_a_warning(
+        h2o, tmp_path, monkeypatch, caplog, cache_path, reason):
+    (tmp_path / "a file").write_text("")
+    monkeypatch.setenv("INVFLAME_CACHE", str(tmp_path / cache_path))
+    with caplog.at_level(logging.WARNING, logger=LOGGER):
+        table = cached(h2o)
+    [warning] = [r.getMessage() for r in caplog.records if r.name == LOGGER]
+    assert warning.startswith("the absorption table is used without being cached: "
+                              f"{tmp_path / cache_path}/absorption-")
+    assert f"cannot be written ({reason}); set INVFLAME_CACHE to a writable folder" in warning
+    np.testing.assert_array_equal(table.sigma, AbsorptionTable.build(
+        {"H2O": h2o}, wavenumber=GRID, temperatures=NODES, progress=False).sigma)
