@@ -116,19 +116,45 @@ def write_vti(field: Field, path) -> Path:
     return _replace_from_temporary(path, write)
 
 
+def voxel_variable(values: np.ndarray, attrs: dict) -> xr.Variable:
+    """A voxel array ``[ix, iy, iz]`` as a float32 variable over ``(z, y, x)``.
+
+    The storage order stays ``(z, y, x)`` whichever axis is up: ParaView's NetCDF CF reader
+    lays out its image in storage order, so x, y and z land where they belong. CF recommends
+    its vertical axis first; with the y axis up that order is (CF) Y, Z, X, which a CF checker
+    notes as a warning.
+
+    Parameters
+    ----------
+    values : ndarray, shape (nx, ny, nz)
+        One value per voxel.
+    attrs : dict
+        The variable's attributes.
+    """
+    return xr.Variable(_AXES[::-1], np.asarray(values).T.astype(np.float32), attrs)
+
+
 def _coordinates(field: Field) -> dict[str, xr.Variable]:
     """Voxel centres along x, y, z (m), each with its CF ``axis`` and its cell bounds.
 
-    Each centre's ``bounds`` is in its encoding, where xarray writes it as the attribute and
-    keeps the bounds variable out of a global ``coordinates`` attribute.
+    CF's axis Z is the vertical (the grid's up axis, ``positive = "up"``); its X and Y are the
+    first and second horizontal axes, named as projection coordinates (a laboratory frame has
+    no latitude or longitude). Each centre's ``bounds`` is in its encoding, where xarray
+    writes it as the attribute and keeps the bounds variable out of a global ``coordinates``
+    attribute.
     """
     grid, centres = field.grid, field.grid.axes()
+    first, second = (_AXES[a] for a in range(3) if a != grid.up_axis)
+    vertical = _AXES[grid.up_axis]
+    roles = {first: ("X", {"standard_name": "projection_x_coordinate"}),
+             second: ("Y", {"standard_name": "projection_y_coordinate"}),
+             vertical: ("Z", {"positive": "up"})}
     coords = {}
     for a, axis in enumerate(_AXES):
         edges = np.linspace(grid.lower[a], grid.upper[a], grid.shape[a] + 1)
-        attrs = {"units": "m", "long_name": f"{axis} of the voxel centre", "axis": axis.upper()}
-        if a == grid.up_axis:
-            attrs["positive"] = "up"
+        cf_axis, extra = roles[axis]
+        attrs = {"units": "m", "long_name": f"{axis} of the voxel centre", "axis": cf_axis,
+                 **extra}
         coords[axis] = xr.Variable(axis, centres[a], attrs, {"bounds": f"{axis}_bounds"})
         coords[f"{axis}_bounds"] = xr.Variable((axis, "bounds"),
                                                np.stack([edges[:-1], edges[1:]], axis=1))
@@ -151,12 +177,12 @@ def fields_dataset(fields: dict[str, Field], attributes: dict | None = None) -> 
     Returns
     -------
     xarray.Dataset
-        Dimensions ``x``, ``y``, ``z`` (voxel centres in m with CF ``axis`` "X", "Y", "Z" and
-        cell bounds ``x_bounds``, ...), a variable
-        ``<set>_<quantity>`` per field set and quantity (``truth_T`` [K], ``start_X_CO2`` [1],
-        ...) over ``(z, y, x)`` with ``units``, ``long_name``, ``standard_name`` and
-        ``field_set`` (``variable.transpose("x", "y", "z")`` is the field's ``[ix, iy, iz]``
-        array).
+        Dimensions ``x``, ``y``, ``z`` (voxel centres in m, with their CF ``axis``: "Z" the
+        up axis, "X" and "Y" the others, see :func:`_coordinates`; cell bounds ``x_bounds``,
+        ...), a variable ``<set>_<quantity>`` per field set and quantity (``truth_T`` [K],
+        ``start_X_CO2`` [1], ...) over ``(z, y, x)`` (:func:`voxel_variable`) with ``units``,
+        ``long_name``, ``standard_name`` and ``field_set`` (``variable.transpose("x", "y",
+        "z")`` is the field's ``[ix, iy, iz]`` array).
     """
     if not fields:
         raise ValueError("fields_dataset needs at least one field set; got none")
@@ -174,9 +200,8 @@ def fields_dataset(fields: dict[str, Field], attributes: dict | None = None) -> 
             name, units, long_name, standard_name = QUANTITIES[field_name]
             attrs = {"units": units, "long_name": f"{long_name} ({set_name})",
                      "standard_name": standard_name, "field_set": set_name}
-            variables[f"{set_name}_{name}"] = xr.Variable(
-                _AXES[::-1], field[field_name].T,
-                {k: v for k, v in attrs.items() if v is not None})
+            variables[f"{set_name}_{name}"] = voxel_variable(
+                field[field_name], {k: v for k, v in attrs.items() if v is not None})
     now = datetime.datetime.now(datetime.UTC).replace(microsecond=0).isoformat()
     attrs = {"Conventions": "CF-1.10",
              "source": f"invflame {__version__}",

@@ -55,7 +55,13 @@ from invflame.experiments.posterior import LaplacePosterior, laplace_posterior
 from invflame.experiments.regularization import configured_problem
 from invflame.experiments.run_folder import CHECKPOINT, SUMMARY, RunLock
 from invflame.experiments.runner import build_scene
-from invflame.export import QUANTITIES, fields_dataset, run_attributes, write_dataset
+from invflame.export import (
+    QUANTITIES,
+    fields_dataset,
+    run_attributes,
+    voxel_variable,
+    write_dataset,
+)
 from invflame.field import SOOTY_FIELD_NAMES, Field
 from invflame.measurement import Measurement
 from invflame.representations.normalization import field_scales, per_field
@@ -258,8 +264,7 @@ def sigma_dataset(sigma: np.ndarray, fields: dict[str, Field], attributes: dict)
                  "long_name": f"posterior standard deviation of the {long_name}"}
         if standard_name is not None:
             attrs["standard_name"] = f"{standard_name} standard_error"
-        dataset[f"sigma_{name}"] = xr.Variable(("z", "y", "x"), values.T.astype(np.float32),
-                                               attrs)
+        dataset[f"sigma_{name}"] = voxel_variable(values, attrs)
     return dataset
 
 

@@ -215,7 +215,7 @@ def test_netcdf_is_read_by_its_cf_conventions(tmp_path):
     write_run(tmp_path / "run")
     (path,) = export_run(tmp_path / "run", ["netcdf"])
     with xr.open_dataset(path) as ds:
-        assert ds.cf.axes == {"X": ["x"], "Y": ["y"], "Z": ["z"]}
+        assert ds.cf.axes == {"X": ["x"], "Y": ["y"], "Z": ["z"]}  # GRID's up axis is z
         for axis in "XYZ":
             assert ds.cf.get_bounds(axis).name == f"{axis.lower()}_bounds"
         assert "coordinates" not in ds.attrs
@@ -260,3 +260,38 @@ def test_cli_names_a_folder_without_results(tmp_path, capsys):
         assert len(error.splitlines()) == 1
     with pytest.raises(FileNotFoundError, match="holds no reconstruction.npz"):
         read_run_fields(tmp_path / "empty")
+
+
+def cf_findings(path, tmp_path) -> dict[str, list[str]]:
+    """The IOOS compliance checker's findings on a file against CF 1.10, by priority ("high":
+    errors, "medium" and "low": warnings and notes), each as its section's name."""
+    from compliance_checker.runner import CheckSuite, ComplianceChecker
+
+    CheckSuite().load_all_available_checkers()
+    report = tmp_path / "cf.json"
+    ComplianceChecker.run_checker(str(path), ["cf:1.10"], 0, "normal",
+                                  output_filename=str(report), output_format="json")
+    (result,) = json.loads(report.read_text()).values()
+    return {priority: [item["name"] for item in result[f"{priority}_priorities"]
+                       if item["value"][0] < item["value"][1]]
+            for priority in ("high", "medium", "low")}
+
+
+@pytest.mark.parametrize("up_axis", [1, 2])
+def test_the_cf_checker_finds_no_error_in_fields_nc(tmp_path, up_axis):
+    """CF's vertical axis Z is the grid's up axis (positive up), X and Y the horizontal ones
+    as projection coordinates; the only finding is the dimension order with the y axis up,
+    which stays (z, y, x) for ParaView's reader (a recommendation of CF, not a rule)."""
+    pytest.importorskip("cf_xarray", reason="cf_xarray is not installed")
+    grid = VoxelGrid(GRID.lower, GRID.upper, GRID.shape, up_axis=up_axis)
+    path = write_netcdf({"truth": Field(grid, sample_field(1).values)}, tmp_path / "f.nc",
+                        {"title": "a test field"})
+    findings = cf_findings(path, tmp_path)
+    assert findings == {"high": [], "medium": ["§2.4 Dimensions"] if up_axis == 1 else [],
+                        "low": []}, findings
+    vertical = "xyz"[up_axis]
+    horizontal = [axis for axis in "xyz" if axis != vertical]
+    with xr.open_dataset(path) as ds:
+        assert ds.cf.axes == {"X": [horizontal[0]], "Y": [horizontal[1]], "Z": [vertical]}
+        assert ds[vertical].attrs["positive"] == "up"
+        assert ds.truth_T.dims == ("z", "y", "x")
