@@ -81,8 +81,7 @@ def _frame_background(path: Path) -> MeasuredBackground:
     about as bright as at the edge.
     """
     measured = read_measurement(path)
-    sigma = np.broadcast_to(measured.measurement.sigma, measured.measurement.data.shape)
-    good = np.isfinite(sigma)
+    good = measured.measurement.measured
     keep = good.any(axis=0)
     wavenumber = measured.wavenumber[keep]
     radiance = []

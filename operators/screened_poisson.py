@@ -54,11 +54,23 @@ class ScreenedPoissonSolve(LinearOperator):
         self.inverse_eigenvalues = 1.0 / (shift.reshape(-1, 1, 1, 1) + weight * eigenvalues)
         super().__init__(dims, dims, dtype=dtype, name="ScreenedPoissonSolve")
 
-    def _forward(self, x):
+    def power(self, x, p: float = 1.0) -> np.ndarray:
+        r""":math:`(c_f I + a\,D^\mathsf{T} D)^{-p} x` in float64: the operator for
+        ``p = 1``, its square root for 1/2, the screened Laplacian itself for -1.
+
+        Parameters
+        ----------
+        x : array_like, shape ``dims``
+            Fields.
+        p : float, optional
+            The power (default 1).
+        """
         spectrum = dctn(np.asarray(x, np.float64), type=2, axes=(1, 2, 3), norm="ortho")
-        solved = idctn(spectrum * self.inverse_eigenvalues, type=2, axes=(1, 2, 3),
-                       norm="ortho")
-        return solved.astype(np.result_type(x, self.dtype), copy=False)
+        return idctn(spectrum * self.inverse_eigenvalues ** p, type=2, axes=(1, 2, 3),
+                     norm="ortho")
+
+    def _forward(self, x):
+        return self.power(x).astype(np.result_type(x, self.dtype), copy=False)
 
     def _adjoint(self, y):
         return self._forward(y)

@@ -70,7 +70,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.fft import dct, dctn, idctn
+from scipy.fft import dct
 
 from invflame.representations.curvature import quadratic_weight
 from operators import ScreenedPoissonSolve
@@ -97,19 +97,16 @@ class SmoothnessPrior:
     """
 
     def __init__(self, dims, spacing, weight: float, floor: float):
-        solve = ScreenedPoissonSolve(dims, spacing, weight, floor)
-        self.dims = tuple(solve.dims)
+        self.solve = ScreenedPoissonSolve(dims, spacing, weight, floor)
+        self.dims = tuple(self.solve.dims)
         self.weight, self.floor = float(weight), float(floor)
-        self.eigenvalues = np.broadcast_to(solve.inverse_eigenvalues, self.dims)
+        self.eigenvalues = np.broadcast_to(self.solve.inverse_eigenvalues, self.dims)
         """Eigenvalues of :math:`\\Gamma` in the cosine basis, shape ``dims``."""
 
     def apply(self, v, power: float = 1.0) -> np.ndarray:
         r""":math:`\Gamma^{p} v` (``power`` :math:`p`: 1, 1/2 for the square root, -1 for the
-        precision), float64 of shape ``dims``."""
-        spectrum = dctn(np.asarray(v, np.float64).reshape(self.dims), type=2,
-                        axes=SPATIAL_AXES, norm="ortho")
-        return idctn(spectrum * self.eigenvalues ** power, type=2, axes=SPATIAL_AXES,
-                     norm="ortho")
+        precision), float64 of shape ``dims`` (:meth:`operators.ScreenedPoissonSolve.power`)."""
+        return self.solve.power(np.asarray(v).reshape(self.dims), power)
 
     def variance(self) -> np.ndarray:
         r""":math:`\mathrm{diag}(\Gamma)`, shape ``dims`` (parameter units²): for the

@@ -28,11 +28,11 @@ def initial_fields(cfg: dict, truth: Field, scene: Scene, measurement: Measureme
     if init["kind"] == "ambient":
         start = ambient(scene.grid.shape, init["ambient"])
     elif init["kind"] == "band-tomography":
-        measured = np.isfinite(np.broadcast_to(measurement.sigma, measurement.data.shape))
         sigma = measurement.sigma if measurement.noisy else None
         start = band_tomography_start(scene, measurement.data, sigma=sigma,
                                       temperature_rise_st=init["temperature_rise"],
-                                      ambient=init["ambient"], measured=measured
+                                      ambient=init["ambient"],
+                                      measured=measurement.measured
                                       ).astype(np.float32)
         if init["calibrate"]:
             calibration = calibrate_start(scene, measurement.data,
